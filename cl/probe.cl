@@ -1,0 +1,25 @@
+/* probe.cl: reports how this device's compiler lays out the shared structs, so that
+ * tests/layout.rs can compare them with the Rust side. */
+#include "cltrace.h"
+
+#define OFFSET(type, field) ((uint)((const char*)&probe_##type.field - (const char*)&probe_##type))
+
+__kernel void probe_layout(__global uint* out) {
+    Triangle probe_Triangle;
+    BvhNode probe_BvhNode;
+    Hit probe_Hit;
+    uint i = 0;
+    out[i++] = sizeof(Triangle);
+    out[i++] = OFFSET(Triangle, v0);
+    out[i++] = OFFSET(Triangle, prim);
+    out[i++] = OFFSET(Triangle, v1);
+    out[i++] = OFFSET(Triangle, v2);
+    out[i++] = sizeof(BvhNode);
+    out[i++] = OFFSET(BvhNode, min);
+    out[i++] = OFFSET(BvhNode, left_or_first);
+    out[i++] = OFFSET(BvhNode, max);
+    out[i++] = OFFSET(BvhNode, right_or_count);
+    out[i++] = sizeof(Hit);
+    out[i++] = OFFSET(Hit, prim);
+    out[i++] = OFFSET(Hit, t);
+}

@@ -1,0 +1,4 @@
+//! The subcommands, as library functions the thin binary calls.
+
+pub mod devices;
+pub mod render;

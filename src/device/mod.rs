@@ -1,0 +1,363 @@
+//! OpenCL devices: listing every platform and device, choosing one (`--device`,
+//! `CLTRACE_DEVICE`), and opening it with a profiling queue.
+
+mod pitched;
+mod program;
+
+pub use pitched::PitchedBuffer;
+pub use program::KernelSource;
+
+use std::fmt;
+use std::str::FromStr;
+
+use ocl::core::{DeviceInfo as Info, DeviceInfoResult as R, DeviceType};
+
+use crate::error::{Error, Result};
+
+/// How to get an OpenCL device on Debian or Ubuntu; part of every "no device" error.
+pub const INSTALL_HINT: &str = "install an OpenCL driver, e.g. PoCL for the CPU: \
+     `apt-get install pocl-opencl-icd ocl-icd-opencl-dev` (or your GPU vendor's OpenCL driver)";
+
+/// The kind of a device, as OpenCL reports it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DeviceKind {
+    Gpu,
+    Cpu,
+    Accelerator,
+    Other,
+}
+
+impl fmt::Display for DeviceKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            DeviceKind::Gpu => "gpu",
+            DeviceKind::Cpu => "cpu",
+            DeviceKind::Accelerator => "accelerator",
+            DeviceKind::Other => "other",
+        })
+    }
+}
+
+/// One OpenCL device and what cltrace needs to know about it.
+#[derive(Clone, Debug)]
+pub struct DeviceInfo {
+    pub platform_index: usize,
+    pub device_index: usize,
+    pub platform_name: String,
+    pub name: String,
+    pub kind: DeviceKind,
+    pub compute_units: u32,
+    pub global_memory: u64,
+    pub max_allocation: u64,
+    pub max_work_group_size: usize,
+    pub opencl_c_version: String,
+    /// `CL_DEVICE_MEM_BASE_ADDR_ALIGN`, in bytes.
+    pub base_address_alignment: usize,
+    /// Whether `-cl-fp32-correctly-rounded-divide-sqrt` is honoured.
+    pub correctly_rounded_divide: bool,
+    pub platform: ocl::Platform,
+    pub device: ocl::Device,
+}
+
+impl DeviceInfo {
+    /// `P:D`, the index `--device` accepts.
+    pub fn index(&self) -> String {
+        format!("{}:{}", self.platform_index, self.device_index)
+    }
+
+    /// Row alignment of pitched output buffers: the device's base address alignment, and
+    /// never less than 256 bytes.
+    pub fn pitch_alignment(&self) -> usize {
+        self.base_address_alignment.max(256)
+    }
+
+    fn read(
+        platform_index: usize,
+        platform: ocl::Platform,
+        device_index: usize,
+        device: ocl::Device,
+    ) -> Result<Self> {
+        let info = |what: Info| {
+            ocl::core::get_device_info(device, what).map_err(|e| {
+                Error::Device(format!(
+                    "cannot query OpenCL device {platform_index}:{device_index}: {e}"
+                ))
+            })
+        };
+        let name = match info(Info::Name)? {
+            R::Name(s) => s.trim().to_string(),
+            _ => String::new(),
+        };
+        let kind = match info(Info::Type)? {
+            R::Type(t) if t.contains(DeviceType::GPU) => DeviceKind::Gpu,
+            R::Type(t) if t.contains(DeviceType::CPU) => DeviceKind::Cpu,
+            R::Type(t) if t.contains(DeviceType::ACCELERATOR) => DeviceKind::Accelerator,
+            _ => DeviceKind::Other,
+        };
+        let number = |r: R| -> u64 {
+            match r {
+                R::MaxComputeUnits(v) | R::MemBaseAddrAlign(v) => v as u64,
+                R::GlobalMemSize(v) | R::MaxMemAllocSize(v) => v,
+                R::MaxWorkGroupSize(v) => v as u64,
+                _ => 0,
+            }
+        };
+        let correctly_rounded_divide = matches!(info(Info::SingleFpConfig)?,
+            R::SingleFpConfig(c) if c.contains(ocl::core::DeviceFpConfig::CORRECTLY_ROUNDED_DIVIDE_SQRT));
+        Ok(DeviceInfo {
+            platform_index,
+            device_index,
+            platform_name: platform.name().unwrap_or_default().trim().to_string(),
+            name,
+            kind,
+            compute_units: number(info(Info::MaxComputeUnits)?) as u32,
+            global_memory: number(info(Info::GlobalMemSize)?),
+            max_allocation: number(info(Info::MaxMemAllocSize)?),
+            max_work_group_size: number(info(Info::MaxWorkGroupSize)?) as usize,
+            opencl_c_version: match info(Info::OpenclCVersion)? {
+                R::OpenclCVersion(s) => s.trim().to_string(),
+                _ => String::new(),
+            },
+            base_address_alignment: (number(info(Info::MemBaseAddrAlign)?) / 8) as usize,
+            correctly_rounded_divide,
+            platform,
+            device,
+        })
+    }
+}
+
+impl fmt::Display for DeviceInfo {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} {} ({}, {} compute units, {})",
+            self.index(),
+            self.name,
+            self.kind,
+            self.compute_units,
+            self.platform_name
+        )
+    }
+}
+
+/// Every device of every platform, in platform then device order.
+pub fn list_devices() -> Result<Vec<DeviceInfo>> {
+    // Ask for the count first: ocl's own listing sleeps ten seconds before it gives up
+    // when no platform is installed.
+    let mut count: ocl::core::ffi::cl_uint = 0;
+    let status = unsafe { ocl::core::ffi::clGetPlatformIDs(0, std::ptr::null_mut(), &mut count) };
+    if status != 0 || count == 0 {
+        return Err(Error::Device(format!(
+            "no OpenCL platform found: {INSTALL_HINT}"
+        )));
+    }
+    let platforms = ocl::core::get_platform_ids()
+        .map_err(|e| Error::Device(format!("cannot list OpenCL platforms: {e}")))?;
+    let mut devices = Vec::new();
+    for (p, id) in platforms.into_iter().enumerate() {
+        let platform = ocl::Platform::new(id);
+        // A platform without devices (or a broken one) is listed as having none.
+        let ids = ocl::Device::list(platform, Some(DeviceType::ALL)).unwrap_or_default();
+        for (d, device) in ids.into_iter().enumerate() {
+            devices.push(DeviceInfo::read(p, platform, d, device)?);
+        }
+    }
+    Ok(devices)
+}
+
+/// Which device to use, as `--device` or `CLTRACE_DEVICE` says it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum DeviceSelector {
+    /// The first GPU, else the first device.
+    Default,
+    /// `P:D`: platform P, device D.
+    Index(usize, usize),
+    /// `gpu`, `cpu` or `accelerator`: the first device of that kind.
+    Kind(DeviceKind),
+    /// Any other text: the first device whose name or platform name contains it, ignoring case.
+    Name(String),
+}
+
+impl FromStr for DeviceSelector {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        let s = s.trim();
+        if s.is_empty() {
+            return Err(Error::Invalid("empty device selector".into()));
+        }
+        if let Some((p, d)) = s.split_once(':')
+            && let (Ok(p), Ok(d)) = (p.parse(), d.parse())
+        {
+            return Ok(DeviceSelector::Index(p, d));
+        }
+        Ok(match s.to_ascii_lowercase().as_str() {
+            "default" => DeviceSelector::Default,
+            "gpu" => DeviceSelector::Kind(DeviceKind::Gpu),
+            "cpu" => DeviceSelector::Kind(DeviceKind::Cpu),
+            "accelerator" => DeviceSelector::Kind(DeviceKind::Accelerator),
+            _ => DeviceSelector::Name(s.to_string()),
+        })
+    }
+}
+
+impl DeviceSelector {
+    /// The selector from `--device` if given, else from `CLTRACE_DEVICE`, else the default.
+    pub fn from_flag_or_env(flag: Option<&str>) -> Result<Self> {
+        match flag {
+            Some(s) => s.parse(),
+            None => match std::env::var("CLTRACE_DEVICE") {
+                Ok(s) if !s.trim().is_empty() => s.parse(),
+                _ => Ok(DeviceSelector::Default),
+            },
+        }
+    }
+
+    /// The device this selector names among `devices`.
+    pub fn pick<'a>(&self, devices: &'a [DeviceInfo]) -> Result<&'a DeviceInfo> {
+        if devices.is_empty() {
+            return Err(Error::Device(format!(
+                "no OpenCL device found: {INSTALL_HINT}"
+            )));
+        }
+        let found = match self {
+            DeviceSelector::Default => devices
+                .iter()
+                .find(|d| d.kind == DeviceKind::Gpu)
+                .or(devices.first()),
+            DeviceSelector::Index(p, d) => devices
+                .iter()
+                .find(|x| x.platform_index == *p && x.device_index == *d),
+            DeviceSelector::Kind(k) => devices.iter().find(|d| d.kind == *k),
+            DeviceSelector::Name(n) => {
+                let n = n.to_lowercase();
+                devices.iter().find(|d| {
+                    d.name.to_lowercase().contains(&n)
+                        || d.platform_name.to_lowercase().contains(&n)
+                })
+            }
+        };
+        found.ok_or_else(|| {
+            let have: Vec<String> = devices.iter().map(|d| format!("{} {}", d.index(), d.name)).collect();
+            Error::Device(format!(
+                "no OpenCL device matches `{}` (devices: {}); see `cltrace devices`, or {INSTALL_HINT}",
+                self.describe(),
+                have.join(", ")
+            ))
+        })
+    }
+
+    fn describe(&self) -> String {
+        match self {
+            DeviceSelector::Default => "default".into(),
+            DeviceSelector::Index(p, d) => format!("{p}:{d}"),
+            DeviceSelector::Kind(k) => k.to_string(),
+            DeviceSelector::Name(n) => n.clone(),
+        }
+    }
+}
+
+/// An opened device: its context and an in-order queue with profiling, so that kernel
+/// times come from the device's own clock.
+pub struct ClDevice {
+    pub info: DeviceInfo,
+    pub context: ocl::Context,
+    pub queue: ocl::Queue,
+}
+
+impl ClDevice {
+    /// Lists the devices and opens the one `selector` names.
+    pub fn select(selector: &DeviceSelector) -> Result<Self> {
+        let devices = list_devices()?;
+        Self::open(selector.pick(&devices)?.clone())
+    }
+
+    pub fn open(info: DeviceInfo) -> Result<Self> {
+        let fail = |e: ocl::Error| {
+            Error::Device(format!(
+                "cannot open OpenCL device {}: {}",
+                info.index(),
+                first_line(&e.to_string())
+            ))
+        };
+        let context = ocl::Context::builder()
+            .platform(info.platform)
+            .devices(info.device)
+            .build()
+            .map_err(fail)?;
+        let queue = ocl::Queue::new(
+            &context,
+            info.device,
+            Some(ocl::flags::CommandQueueProperties::PROFILING_ENABLE),
+        )
+        .map_err(fail)?;
+        Ok(ClDevice {
+            info,
+            context,
+            queue,
+        })
+    }
+
+    /// Wraps an OpenCL failure during `doing` into a one-line error, naming running out of
+    /// device memory as such.
+    pub fn error(&self, doing: &str, e: ocl::Error) -> Error {
+        device_error(&self.info, doing, e)
+    }
+}
+
+pub(crate) fn device_error(info: &DeviceInfo, doing: &str, e: ocl::Error) -> Error {
+    use ocl::core::Status;
+    let status = e.api_status();
+    let what = match status {
+        Some(Status::CL_MEM_OBJECT_ALLOCATION_FAILURE)
+        | Some(Status::CL_OUT_OF_RESOURCES)
+        | Some(Status::CL_OUT_OF_HOST_MEMORY)
+        | Some(Status::CL_INVALID_BUFFER_SIZE) => format!(
+            "device out of memory ({status:?}) while {doing} on {} (global memory {} MiB, largest allocation {} MiB)",
+            info.name,
+            info.global_memory >> 20,
+            info.max_allocation >> 20
+        ),
+        Some(s) => format!("OpenCL error {s:?} while {doing} on {}", info.name),
+        None => format!(
+            "OpenCL error while {doing} on {}: {}",
+            info.name,
+            first_line(&e.to_string())
+        ),
+    };
+    Error::Device(what)
+}
+
+fn first_line(s: &str) -> String {
+    s.lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty())
+        .unwrap_or("")
+        .to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn selectors_parse() {
+        assert_eq!(
+            "1:0".parse::<DeviceSelector>().unwrap(),
+            DeviceSelector::Index(1, 0)
+        );
+        assert_eq!(
+            "GPU".parse::<DeviceSelector>().unwrap(),
+            DeviceSelector::Kind(DeviceKind::Gpu)
+        );
+        assert_eq!(
+            "cpu".parse::<DeviceSelector>().unwrap(),
+            DeviceSelector::Kind(DeviceKind::Cpu)
+        );
+        assert_eq!(
+            "H100".parse::<DeviceSelector>().unwrap(),
+            DeviceSelector::Name("H100".into())
+        );
+        assert!("".parse::<DeviceSelector>().is_err());
+    }
+}

@@ -1,0 +1,72 @@
+//! Pitched device images: 2D buffers whose rows start at multiples of the device's
+//! alignment, as the thesis's `cudaMallocPitch`, read back with a rectangular read so that
+//! the row padding never reaches the host.
+
+use ocl::OclPrm;
+
+use super::{ClDevice, device_error};
+use crate::error::Result;
+
+/// A `width` x `height` image of `T` on the device, `pitch` elements from row to row.
+pub struct PitchedBuffer<T: OclPrm> {
+    pub buffer: ocl::Buffer<T>,
+    pub width: usize,
+    pub height: usize,
+    /// Elements from the start of one row to the next (a multiple of the alignment).
+    pub pitch: usize,
+}
+
+impl<T: OclPrm> PitchedBuffer<T> {
+    /// Row pitch in bytes for `width` elements: `width * size_of::<T>()` rounded up to
+    /// the device's pitch alignment.
+    pub fn pitch_bytes_for(device: &ClDevice, width: usize) -> usize {
+        let align = device.info.pitch_alignment();
+        (width * size_of::<T>()).div_ceil(align) * align
+    }
+
+    pub fn new(device: &ClDevice, width: usize, height: usize) -> Result<Self> {
+        let pitch_bytes = Self::pitch_bytes_for(device, width);
+        debug_assert_eq!(pitch_bytes % size_of::<T>(), 0);
+        let pitch = pitch_bytes / size_of::<T>();
+        let buffer = ocl::Buffer::<T>::builder()
+            .queue(device.queue.clone())
+            .flags(ocl::flags::MEM_WRITE_ONLY)
+            .len(pitch * height)
+            .build()
+            .map_err(|e| device_error(&device.info, "allocating the output image", e))?;
+        Ok(PitchedBuffer {
+            buffer,
+            width,
+            height,
+            pitch,
+        })
+    }
+
+    /// Reads the first `rows` rows into `out`, tightly packed (`width` elements a row),
+    /// skipping the padding. Blocks until done (ocl's reads block by default).
+    pub fn read_rows(&self, device: &ClDevice, rows: usize, out: &mut [T]) -> Result<()> {
+        assert!(
+            rows <= self.height && out.len() >= rows * self.width,
+            "read_rows out of bounds"
+        );
+        if rows == 0 {
+            return Ok(());
+        }
+        let size = size_of::<T>();
+        self.buffer
+            .cmd()
+            .queue(&device.queue)
+            .read(&mut out[..rows * self.width])
+            .rect(
+                [0, 0, 0],
+                [0, 0, 0],
+                [self.width, rows, 1],
+                self.pitch * size,
+                0,
+                self.width * size,
+                0,
+            )
+            .enq()
+            .map_err(|e| device_error(&device.info, "reading the image back", e))
+    }
+}

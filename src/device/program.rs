@@ -1,0 +1,114 @@
+//! The OpenCL C sources in `cl/`, embedded in the binary, and their compilation.
+
+use std::ffi::CString;
+
+use ocl::core::ClDeviceIdPtr;
+
+use super::{ClDevice, first_line};
+use crate::error::{Error, Result};
+
+const HEADER: &str = include_str!("../../cl/cltrace.h");
+const INCLUDE_LINE: &str = "#include \"cltrace.h\"";
+
+/// A kernel file of `cl/`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KernelSource {
+    /// `brute.cl`: every ray against every triangle.
+    Brute,
+    /// `probe.cl`: reports the shared structs' layout.
+    Probe,
+}
+
+impl KernelSource {
+    pub fn file_name(self) -> &'static str {
+        match self {
+            KernelSource::Brute => "brute.cl",
+            KernelSource::Probe => "probe.cl",
+        }
+    }
+
+    fn text(self) -> &'static str {
+        match self {
+            KernelSource::Brute => include_str!("../../cl/brute.cl"),
+            KernelSource::Probe => include_str!("../../cl/probe.cl"),
+        }
+    }
+
+    /// The complete source: the kernel file with the shared header spliced in where it
+    /// includes it (the program is built from memory, where `#include` finds no files).
+    pub fn source(self) -> String {
+        self.text().replacen(INCLUDE_LINE, HEADER, 1)
+    }
+}
+
+impl ClDevice {
+    /// Compiles `kernel` for this device with `-D name=value` for each define. The host
+    /// and device must round identically, so division and square root are correctly
+    /// rounded where the device offers it. A failed build reports the device's build log.
+    pub fn build(&self, kernel: KernelSource, defines: &[(&str, String)]) -> Result<ocl::Program> {
+        let mut options = String::from("-cl-std=CL1.2");
+        if self.info.correctly_rounded_divide {
+            options.push_str(" -cl-fp32-correctly-rounded-divide-sqrt");
+        }
+        for (name, value) in defines {
+            options.push_str(&format!(" -D {name}={value}"));
+        }
+        self.build_source(kernel.file_name(), &kernel.source(), &options)
+    }
+
+    /// Compiles arbitrary source; `name` labels errors.
+    pub fn build_source(&self, name: &str, source: &str, options: &str) -> Result<ocl::Program> {
+        let fail = |e: ocl::core::Error| {
+            Error::Device(format!(
+                "cannot compile {name} for {}: {}",
+                self.info.name,
+                first_line(&e.to_string())
+            ))
+        };
+        let source = CString::new(source)
+            .map_err(|_| Error::Device(format!("{name} contains a NUL byte")))?;
+        let options = CString::new(options).expect("build options contain no NUL");
+        let program =
+            ocl::core::create_program_with_source(&self.context, &[source]).map_err(fail)?;
+        let status = unsafe {
+            ocl::core::ffi::clBuildProgram(
+                program.as_ptr(),
+                1,
+                &self.info.device.as_core().as_ptr(),
+                options.as_ptr(),
+                None,
+                std::ptr::null_mut(),
+            )
+        };
+        if status != 0 {
+            let log = match ocl::core::get_program_build_info(
+                &program,
+                self.info.device.as_core(),
+                ocl::core::ProgramBuildInfo::BuildLog,
+            ) {
+                Ok(log) => log.to_string(),
+                Err(e) => format!("(no build log: {e})"),
+            };
+            return Err(Error::Device(format!(
+                "kernel {name} failed to build on {} (OpenCL status {status}); build log:\n{}",
+                self.info.name,
+                log.trim_end()
+            )));
+        }
+        Ok(ocl::Program::from(program))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn header_is_spliced_into_every_kernel() {
+        for k in [KernelSource::Brute, KernelSource::Probe] {
+            let s = k.source();
+            assert!(s.contains("typedef struct"), "{}", k.file_name());
+            assert!(!s.contains(INCLUDE_LINE), "{}", k.file_name());
+        }
+    }
+}

@@ -1,0 +1,68 @@
+//! The crate's error type: every failure a user can cause or meet, as one clear line.
+
+use std::path::{Path, PathBuf};
+
+/// Everything that can go wrong between a scene and an image.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A mesh or scene file that cannot be read or makes no sense.
+    #[error("{}: {message}", location(path, *line))]
+    Input {
+        path: PathBuf,
+        /// 1-based line, where the parser knows it.
+        line: Option<usize>,
+        message: String,
+    },
+    /// A request that cannot be met: a bad camera, resolution or option value.
+    #[error("{0}")]
+    Invalid(String),
+    /// OpenCL trouble: no platform or device, a failed build, out of memory, a lost device.
+    #[error("{0}")]
+    Device(String),
+    /// The output could not be written.
+    #[error("{}: {message}", path.display())]
+    Output { path: PathBuf, message: String },
+}
+
+fn location(path: &Path, line: Option<usize>) -> String {
+    match line {
+        Some(line) => format!("{}:{line}", path.display()),
+        None => path.display().to_string(),
+    }
+}
+
+impl Error {
+    /// Bad input (mesh, scene, camera, options) exits with 2, like a usage error;
+    /// failures of the machine (device, output) with 1.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            Error::Input { .. } | Error::Invalid(_) => 2,
+            Error::Device(_) | Error::Output { .. } => 1,
+        }
+    }
+
+    pub(crate) fn input(path: &Path, message: impl Into<String>) -> Self {
+        Error::Input {
+            path: path.to_path_buf(),
+            line: None,
+            message: message.into(),
+        }
+    }
+
+    pub(crate) fn input_at(path: &Path, line: usize, message: impl Into<String>) -> Self {
+        Error::Input {
+            path: path.to_path_buf(),
+            line: Some(line),
+            message: message.into(),
+        }
+    }
+
+    pub(crate) fn output(path: &Path, message: impl ToString) -> Self {
+        Error::Output {
+            path: path.to_path_buf(),
+            message: message.to_string(),
+        }
+    }
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;

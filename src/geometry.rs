@@ -1,0 +1,122 @@
+//! Rays and axis-aligned boxes, the two shapes every stage speaks.
+
+use glam::Vec3;
+
+/// A ray `origin + t * dir`. `dir` need not be unit length: primary rays keep the
+/// unnormalised pixel direction so that the host and the device compute identical bits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub dir: Vec3,
+}
+
+impl Ray {
+    pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        Ray { origin, dir }
+    }
+
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + self.dir * t
+    }
+}
+
+/// An axis-aligned bounding box. The empty box has `min = +inf`, `max = -inf`, so that
+/// growing it by any point gives that point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Default for Aabb {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}
+
+impl Aabb {
+    pub const EMPTY: Aabb = Aabb {
+        min: Vec3::splat(f32::INFINITY),
+        max: Vec3::splat(f32::NEG_INFINITY),
+    };
+
+    pub fn from_points(points: impl IntoIterator<Item = Vec3>) -> Self {
+        points.into_iter().fold(Self::EMPTY, |b, p| b.grown(p))
+    }
+
+    pub fn grown(self, p: Vec3) -> Self {
+        Aabb {
+            min: self.min.min(p),
+            max: self.max.max(p),
+        }
+    }
+
+    pub fn union(self, other: Aabb) -> Self {
+        Aabb {
+            min: self.min.min(other.min),
+            max: self.max.max(other.max),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
+    }
+
+    pub fn extent(&self) -> Vec3 {
+        if self.is_empty() {
+            Vec3::ZERO
+        } else {
+            self.max - self.min
+        }
+    }
+
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    /// Surface area; zero for an empty box, so that empty bins cost nothing in the SAH.
+    pub fn surface_area(&self) -> f32 {
+        let e = self.extent();
+        2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+    }
+
+    /// Whether `other` lies inside this box (boundaries included).
+    pub fn contains(&self, other: &Aabb) -> bool {
+        other.is_empty() || (self.min.cmple(other.min).all() && other.max.cmple(self.max).all())
+    }
+
+    /// Index (0, 1, 2) of the longest axis.
+    pub fn largest_axis(&self) -> usize {
+        let e = self.extent();
+        if e.x >= e.y && e.x >= e.z {
+            0
+        } else if e.y >= e.z {
+            1
+        } else {
+            2
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn empty_box_grows_to_a_point_and_has_no_area() {
+        assert!(Aabb::EMPTY.is_empty());
+        assert_eq!(Aabb::EMPTY.surface_area(), 0.0);
+        let b = Aabb::EMPTY.grown(Vec3::new(1.0, 2.0, 3.0));
+        assert_eq!(b.min, b.max);
+        assert_eq!(b.surface_area(), 0.0);
+    }
+
+    #[test]
+    fn unit_cube_area_and_axis() {
+        let b = Aabb::from_points([Vec3::ZERO, Vec3::new(1.0, 1.0, 2.0)]);
+        assert_eq!(b.surface_area(), 10.0);
+        assert_eq!(b.largest_axis(), 2);
+        assert!(b.contains(&Aabb::from_points([Vec3::splat(0.5)])));
+        assert!(!b.contains(&Aabb::from_points([Vec3::splat(1.5)])));
+    }
+}

@@ -1,0 +1,267 @@
+//! Scene files: a small TOML format naming a mesh (a file, relative to the scene file, or a
+//! built-in generator) plus camera and render settings. Command-line flags override them.
+//!
+//! ```toml
+//! mesh = "room.obj"            # or a [generator] table, e.g. kind = "sphereflake"
+//!
+//! [camera]                     # every key optional; missing ones use the "auto" framing
+//! eye = [0.0, 1.0, 4.0]
+//! look_at = [0.0, 0.5, 0.0]
+//! up = [0.0, 1.0, 0.0]
+//! fov = 45.0                   # vertical, degrees
+//! width = 1280
+//! height = 720
+//!
+//! [render]
+//! method = "cl-bvh"
+//! shade = "lambert"
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+use crate::input::generate::Generator;
+use crate::input::load_mesh;
+use crate::mesh::Mesh;
+use crate::render::{Method, Shade};
+
+/// The default scene, built into the binary so that `cltrace render` needs no files.
+pub const DEFAULT_SCENE: &str = include_str!("../../scenes/default.toml");
+
+/// Where the mesh comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MeshSource {
+    File(PathBuf),
+    Generator(Generator),
+}
+
+impl MeshSource {
+    pub fn load(&self) -> Result<Mesh> {
+        match self {
+            MeshSource::File(path) => load_mesh(path),
+            MeshSource::Generator(g) => g.generate(),
+        }
+    }
+
+    /// The mesh's name for reports: the file name or the generator with its parameters.
+    pub fn name(&self) -> String {
+        match self {
+            MeshSource::File(path) => path
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_else(|| path.display().to_string()),
+            MeshSource::Generator(g) => g.name(),
+        }
+    }
+}
+
+/// Camera settings; `None` means "not said here" (a later layer or the auto framing decides).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSettings {
+    pub eye: Option<[f32; 3]>,
+    pub look_at: Option<[f32; 3]>,
+    pub up: Option<[f32; 3]>,
+    /// Vertical field of view in degrees.
+    pub fov: Option<f32>,
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+}
+
+impl CameraSettings {
+    /// Each setting from `self` where given, else from `base`.
+    pub fn over(self, base: CameraSettings) -> CameraSettings {
+        CameraSettings {
+            eye: self.eye.or(base.eye),
+            look_at: self.look_at.or(base.look_at),
+            up: self.up.or(base.up),
+            fov: self.fov.or(base.fov),
+            width: self.width.or(base.width),
+            height: self.height.or(base.height),
+        }
+    }
+}
+
+/// Render settings; `None` means "not said here".
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderSettings {
+    pub method: Option<Method>,
+    pub shade: Option<Shade>,
+}
+
+impl RenderSettings {
+    pub fn over(self, base: RenderSettings) -> RenderSettings {
+        RenderSettings {
+            method: self.method.or(base.method),
+            shade: self.shade.or(base.shade),
+        }
+    }
+}
+
+/// A parsed scene: the mesh to load and the settings the scene file gave.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneDescription {
+    pub mesh: MeshSource,
+    pub camera: CameraSettings,
+    pub render: RenderSettings,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    mesh: Option<PathBuf>,
+    generator: Option<Generator>,
+    #[serde(default)]
+    camera: CameraSettings,
+    #[serde(default)]
+    render: RenderSettings,
+}
+
+impl SceneDescription {
+    /// Reads a scene file; a mesh path in it is taken relative to the file's folder.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| Error::input(path, crate::input::io_reason(&e)))?;
+        let base = path.parent().unwrap_or(Path::new(""));
+        Self::parse(&text, path, base)
+    }
+
+    /// The built-in default scene.
+    pub fn builtin_default() -> Self {
+        Self::parse(
+            DEFAULT_SCENE,
+            Path::new("<built-in default scene>"),
+            Path::new(""),
+        )
+        .expect("the built-in default scene parses")
+    }
+
+    /// A scene that is just a mesh file, with every setting left to defaults and flags.
+    pub fn from_mesh(path: &Path) -> Self {
+        SceneDescription {
+            mesh: MeshSource::File(path.to_path_buf()),
+            camera: CameraSettings::default(),
+            render: RenderSettings::default(),
+        }
+    }
+
+    /// Parses scene text; `path` names it in errors, `base` anchors relative mesh paths.
+    pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Self> {
+        let file: SceneFile = toml::from_str(text).map_err(|e| {
+            let message = e.message().trim().replace('\n', " ");
+            match e.span() {
+                Some(span) => Error::input_at(path, line_of(text, span.start), message),
+                None => Error::input(path, message),
+            }
+        })?;
+        let mesh = match (file.mesh, file.generator) {
+            (Some(mesh), None) => MeshSource::File(base.join(mesh)),
+            (None, Some(generator)) => MeshSource::Generator(generator),
+            (Some(_), Some(_)) => {
+                return Err(Error::input(
+                    path,
+                    "give either `mesh` or a [generator] table, not both",
+                ));
+            }
+            (None, None) => {
+                return Err(Error::input(
+                    path,
+                    "no mesh: give `mesh = \"file.obj\"` or a [generator] table",
+                ));
+            }
+        };
+        Ok(SceneDescription {
+            mesh,
+            camera: file.camera,
+            render: file.render,
+        })
+    }
+}
+
+fn line_of(text: &str, byte: usize) -> usize {
+    1 + text.as_bytes()[..byte.min(text.len())]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<SceneDescription> {
+        SceneDescription::parse(text, Path::new("s.toml"), Path::new("dir"))
+    }
+
+    #[test]
+    fn builtin_default_parses() {
+        let s = SceneDescription::builtin_default();
+        assert!(matches!(s.mesh, MeshSource::Generator(_)));
+    }
+
+    #[test]
+    fn mesh_path_is_relative_to_the_scene() {
+        let s = parse("mesh = \"a/b.obj\"\n[camera]\nfov = 30\n").unwrap();
+        assert_eq!(s.mesh, MeshSource::File(PathBuf::from("dir/a/b.obj")));
+        assert_eq!(s.camera.fov, Some(30.0));
+    }
+
+    #[test]
+    fn generator_with_parameters() {
+        let s = parse("[generator]\nkind = \"soup\"\ntriangles = 10\nseed = 3\n").unwrap();
+        assert_eq!(
+            s.mesh,
+            MeshSource::Generator(Generator::Soup {
+                triangles: 10,
+                seed: 3
+            })
+        );
+    }
+
+    #[test]
+    fn unknown_keys_are_errors_with_a_line() {
+        for (text, line) in [
+            ("mesh = \"x.obj\"\ncolour = 1\n", 2),
+            ("mesh = \"x.obj\"\n[camera]\nzoom = 2\n", 3),
+            ("[generator]\nkind = \"cube\"\nsize = 2\n", 1),
+            ("[generator]\nkind = \"teapot\"\n", 2),
+            ("mesh = \"x.obj\"\n[render]\nmethod = \"magic\"\n", 3),
+        ] {
+            let err = parse(text).unwrap_err();
+            let msg = err.to_string();
+            assert!(msg.starts_with(&format!("s.toml:{line}:")), "{msg}");
+            assert!(!msg.contains('\n'), "{msg}");
+        }
+    }
+
+    #[test]
+    fn exactly_one_mesh_source() {
+        assert!(parse("[camera]\nfov = 40\n").is_err());
+        assert!(parse("mesh = \"a.obj\"\n[generator]\nkind = \"cube\"\n").is_err());
+    }
+
+    #[test]
+    fn wrong_types_are_errors() {
+        assert!(parse("mesh = \"a.obj\"\n[camera]\nwidth = \"wide\"\n").is_err());
+        assert!(parse("mesh = 3\n").is_err());
+    }
+
+    #[test]
+    fn overrides_take_precedence() {
+        let file = CameraSettings {
+            fov: Some(30.0),
+            width: Some(100),
+            ..Default::default()
+        };
+        let flags = CameraSettings {
+            width: Some(200),
+            ..Default::default()
+        };
+        let merged = flags.over(file);
+        assert_eq!(merged.width, Some(200));
+        assert_eq!(merged.fov, Some(30.0));
+    }
+}

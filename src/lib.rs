@@ -1,0 +1,28 @@
+//! cltrace: a BVH ray tracer for any OpenCL device.
+//!
+//! The stages, one module each, in the order a render runs them:
+//!
+//! - [`input`]: meshes from OBJ/PLY files or generators, and TOML scene files;
+//! - [`mesh`]: the triangle mesh every later stage reads;
+//! - [`camera`]: the pinhole camera and its exact pixel-to-ray arithmetic;
+//! - [`triangle`]: the watertight ray/triangle test (mirrored in `cl/cltrace.h`);
+//! - [`layout`]: the flat device structs the kernels read;
+//! - [`device`]: OpenCL device selection, kernel compilation, pitched images;
+//! - [`render`]: the CPU reference tracers and the OpenCL renderer;
+//! - [`output`]: images and hit records, written atomically;
+//! - [`commands`]: the subcommands the `cltrace` binary runs.
+
+pub mod camera;
+pub mod commands;
+pub mod device;
+pub mod error;
+pub mod geometry;
+pub mod input;
+pub mod layout;
+pub mod mesh;
+pub mod output;
+pub mod render;
+pub mod report;
+pub mod triangle;
+
+pub use error::{Error, Result};

@@ -1,0 +1,168 @@
+//! The `cltrace` command: parses the command line and hands over to the library.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand};
+
+use cltrace::commands::{devices, render};
+use cltrace::input::scene_file::{CameraSettings, RenderSettings};
+use cltrace::render::{Method, Shade};
+use cltrace::report::Verbosity;
+
+const EXAMPLES: &str = "\
+Examples:
+  cltrace render                                  the built-in default scene to render.png
+  cltrace render bunny.obj -o bunny.png --width 512 --height 512
+  cltrace render scenes/room.toml --shade normal --method cpu-brute
+  cltrace render dragon.obj.gz --device cpu --hits hits.bin
+  cltrace devices                                 list every OpenCL platform and device
+
+Exit status: 0 on success, 2 for bad input (mesh, scene, camera, options), 1 for device
+or output failures.";
+
+#[derive(Parser)]
+#[command(
+    name = "cltrace",
+    version,
+    about = "A BVH ray tracer for any OpenCL device: NVIDIA GPUs and CPUs through PoCL",
+    after_help = EXAMPLES
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene file or a mesh to an image (one primary ray per pixel)
+    #[command(after_help = EXAMPLES)]
+    Render(RenderArgs),
+    /// List every OpenCL platform and device, with the index `--device` accepts
+    Devices,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// A scene file (.toml) or a mesh (.obj, .obj.gz, .ply, .ply.gz); the built-in default
+    /// scene when omitted. Flags override the scene file's settings.
+    scene: Option<PathBuf>,
+
+    /// Output image; the format follows the extension: png, bmp, ppm, jpg
+    #[arg(short, long, default_value = "render.png")]
+    output: PathBuf,
+
+    /// Image width in pixels (1 to 16384) [default: scene's, else 1280]
+    #[arg(long)]
+    width: Option<u32>,
+
+    /// Image height in pixels (1 to 16384) [default: scene's, else 720]
+    #[arg(long)]
+    height: Option<u32>,
+
+    /// Vertical field of view in degrees, in (0, 180) [default: scene's, else 45]
+    #[arg(long)]
+    fov: Option<f32>,
+
+    /// Eye position `x,y,z` [default: auto framing, in front of the mesh along +z]
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    eye: Option<[f32; 3]>,
+
+    /// Point to look at `x,y,z` [default: centre of the mesh's bounding box]
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    look_at: Option<[f32; 3]>,
+
+    /// Up direction `x,y,z` [default: 0,1,0]
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    up: Option<[f32; 3]>,
+
+    /// OpenCL device: `P:D` index (see `cltrace devices`), `gpu`, `cpu`, or part of its
+    /// name [default: the first GPU, else the first device]
+    #[arg(long, env = "CLTRACE_DEVICE")]
+    device: Option<String>,
+
+    /// How rays find their closest hit [default: scene's, else cl-brute]
+    #[arg(long, value_enum)]
+    method: Option<Method>,
+
+    /// How hits are coloured [default: scene's, else lambert]
+    #[arg(long, value_enum)]
+    shade: Option<Shade>,
+
+    /// Also write the raw per-pixel hit records here (8 bytes a pixel: u32 triangle, f32 distance)
+    #[arg(long, value_name = "FILE")]
+    hits: Option<PathBuf>,
+
+    /// Print nothing but errors
+    #[arg(short, long, conflicts_with = "verbose")]
+    quiet: bool,
+
+    /// Also print mesh, camera and device details
+    #[arg(short, long)]
+    verbose: bool,
+}
+
+fn parse_vec3(s: &str) -> Result<[f32; 3], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let numbers: Vec<f32> = parts
+        .iter()
+        .map(|p| p.parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("`{s}` is not three numbers `x,y,z`"))?;
+    match numbers.as_slice() {
+        [x, y, z] if numbers.iter().all(|v| v.is_finite()) => Ok([*x, *y, *z]),
+        _ => Err(format!("`{s}` is not three finite numbers `x,y,z`")),
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => run_render(args),
+        Command::Devices => devices::devices_table().map(|table| print!("{table}")),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(e.exit_code() as u8)
+        }
+    }
+}
+
+fn run_render(args: RenderArgs) -> cltrace::Result<()> {
+    let verbosity = Verbosity::from_flags(args.quiet, args.verbose);
+    let request = render::RenderRequest {
+        scene: args.scene,
+        camera: CameraSettings {
+            eye: args.eye,
+            look_at: args.look_at,
+            up: args.up,
+            fov: args.fov,
+            width: args.width,
+            height: args.height,
+        },
+        render: RenderSettings {
+            method: args.method,
+            shade: args.shade,
+        },
+        output: args.output,
+        hits: args.hits,
+        device: args.device,
+        verbosity,
+    };
+    let outcome = render::run(&request)?;
+    let on = outcome
+        .device
+        .map(|d| format!(" on {d}"))
+        .unwrap_or_default();
+    verbosity.say(format!(
+        "wrote {} ({}x{}, {}{on})",
+        request.output.display(),
+        outcome.frame.width,
+        outcome.frame.height,
+        outcome.method.name(),
+    ));
+    verbosity.say(outcome.timings.summary());
+    Ok(())
+}

@@ -1,0 +1,160 @@
+//! The triangle mesh every stage works on: one vertex list and one triangle list, with
+//! triangle `i` being the i-th triangle of the input in file order.
+
+use std::path::Path;
+
+use glam::Vec3;
+
+use crate::error::{Error, Result};
+use crate::geometry::Aabb;
+
+/// Largest coordinate magnitude accepted. The watertight intersection multiplies three
+/// coordinate differences together; with |x| <= 1e12 every such product stays finite in f32.
+pub const MAX_COORDINATE: f32 = 1e12;
+
+/// An indexed triangle mesh. Loaders and generators guarantee (through [`Mesh::check`])
+/// that it has at least one triangle, that every index is in range and that every
+/// vertex a triangle uses is finite and within [`MAX_COORDINATE`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    pub positions: Vec<Vec3>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    pub fn new(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Self {
+        Mesh {
+            positions,
+            triangles,
+        }
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// The three corners of triangle `i`.
+    pub fn corners(&self, i: usize) -> [Vec3; 3] {
+        self.triangles[i].map(|v| self.positions[v as usize])
+    }
+
+    /// The box around every vertex a triangle uses (the "auto" camera frames this box).
+    pub fn bounds(&self) -> Aabb {
+        self.triangles
+            .iter()
+            .flatten()
+            .fold(Aabb::EMPTY, |b, &v| b.grown(self.positions[v as usize]))
+    }
+
+    /// Triangles whose area is exactly zero. They are kept (their index still counts in the
+    /// file order) but no ray ever hits them.
+    pub fn degenerate_count(&self) -> usize {
+        (0..self.triangles.len())
+            .filter(|&i| {
+                let [a, b, c] = self.corners(i);
+                (b - a).cross(c - a) == Vec3::ZERO
+            })
+            .count()
+    }
+
+    /// Appends `other`'s triangles after this mesh's, keeping both orders.
+    pub fn append(&mut self, other: &Mesh) {
+        let offset = self.positions.len() as u32;
+        self.positions.extend_from_slice(&other.positions);
+        self.triangles
+            .extend(other.triangles.iter().map(|t| t.map(|v| v + offset)));
+    }
+
+    /// Rejects what no renderer can use: no triangles, an index past the vertex list, a
+    /// vertex that is NaN, infinite or beyond [`MAX_COORDINATE`], more triangles than a
+    /// `u32` index can name.
+    pub fn check(&self, path: &Path) -> Result<()> {
+        if self.triangles.is_empty() {
+            return Err(Error::input(path, "the mesh has no triangles"));
+        }
+        if self.triangles.len() >= u32::MAX as usize {
+            return Err(Error::input(
+                path,
+                format!(
+                    "the mesh has {} triangles; at most {} are supported",
+                    self.triangles.len(),
+                    u32::MAX - 1
+                ),
+            ));
+        }
+        let n = self.positions.len();
+        for (i, tri) in self.triangles.iter().enumerate() {
+            if let Some(&v) = tri.iter().find(|&&v| v as usize >= n) {
+                return Err(Error::input(
+                    path,
+                    format!("triangle {i} uses vertex {v}, but there are only {n} vertices"),
+                ));
+            }
+            for &v in tri {
+                let p = self.positions[v as usize];
+                if !p.is_finite() {
+                    return Err(Error::input(
+                        path,
+                        format!(
+                            "triangle {i} has a vertex with a NaN or infinite coordinate {:?}",
+                            p.to_array()
+                        ),
+                    ));
+                }
+                if p.abs().max_element() > MAX_COORDINATE {
+                    return Err(Error::input(
+                        path,
+                        format!(
+                            "triangle {i} has a vertex coordinate beyond +-{MAX_COORDINATE:e}: {:?}",
+                            p.to_array()
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn quad() -> Mesh {
+        Mesh::new(
+            vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE],
+            vec![[0, 1, 2], [1, 3, 2]],
+        )
+    }
+
+    #[test]
+    fn append_offsets_indices() {
+        let mut m = quad();
+        m.append(&quad());
+        assert_eq!(m.triangle_count(), 4);
+        assert_eq!(m.triangles[2], [4, 5, 6]);
+        assert_eq!(m.corners(3), quad().corners(1));
+    }
+
+    #[test]
+    fn check_rejects_bad_meshes() {
+        let p = Path::new("m.obj");
+        assert!(quad().check(p).is_ok());
+        assert!(Mesh::default().check(p).is_err());
+        let mut bad = quad();
+        bad.triangles[1][2] = 4;
+        assert!(bad.check(p).unwrap_err().to_string().contains("vertex 4"));
+        let mut nan = quad();
+        nan.positions[3].y = f32::NAN;
+        assert!(nan.check(p).unwrap_err().to_string().contains("NaN"));
+    }
+
+    #[test]
+    fn degenerate_triangles_are_counted() {
+        let mut m = quad();
+        m.triangles.push([0, 0, 1]);
+        m.positions.push(Vec3::new(2.0, 0.0, 0.0));
+        m.triangles.push([0, 1, 4]); // collinear
+        assert_eq!(m.degenerate_count(), 2);
+    }
+}

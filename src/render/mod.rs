@@ -1,0 +1,139 @@
+//! Rendering: one frame of per-pixel closest hits and colours, by brute force or through
+//! a BVH, on the CPU or on an OpenCL device. Every method fills the same [`Frame`].
+
+pub mod cpu;
+pub mod opencl;
+mod shade;
+
+pub use shade::ShadeParams;
+
+use bytemuck::{Pod, Zeroable};
+use serde::Deserialize;
+
+/// How rays find their closest hit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Every ray against every triangle, on the host (rayon over rows).
+    CpuBrute,
+    /// BVH traversal on the host (rayon over rows).
+    CpuBvh,
+    /// Every ray against every triangle, in an OpenCL kernel.
+    ClBrute,
+    /// BVH traversal in an OpenCL kernel.
+    ClBvh,
+}
+
+impl Method {
+    pub const ALL: [Method; 4] = [
+        Method::CpuBrute,
+        Method::CpuBvh,
+        Method::ClBrute,
+        Method::ClBvh,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::CpuBrute => "cpu-brute",
+            Method::CpuBvh => "cpu-bvh",
+            Method::ClBrute => "cl-brute",
+            Method::ClBvh => "cl-bvh",
+        }
+    }
+
+    pub fn uses_opencl(self) -> bool {
+        matches!(self, Method::ClBrute | Method::ClBvh)
+    }
+
+    pub fn uses_bvh(self) -> bool {
+        matches!(self, Method::CpuBvh | Method::ClBvh)
+    }
+}
+
+/// How a hit becomes a colour. Misses are black.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Shade {
+    /// The geometric normal (by winding), mapped from [-1, 1] to [0, 1] per channel.
+    Normal,
+    /// Distance: white at the nearest point of the scene's bounding sphere, black at the farthest.
+    Depth,
+    /// A two-sided headlight: |cos| between the geometric normal and the ray.
+    Lambert,
+}
+
+impl Shade {
+    /// The number the kernels use (`SHADE_*` in cl/cltrace.h).
+    pub fn code(self) -> i32 {
+        match self {
+            Shade::Normal => 0,
+            Shade::Depth => 1,
+            Shade::Lambert => 2,
+        }
+    }
+}
+
+/// Marks a miss in [`Hit::prim`].
+pub const MISS: u32 = u32::MAX;
+
+/// One pixel's closest hit, as the kernels write it and `--hits` stores it: the triangle's
+/// index in file order ([`MISS`] for none) and the distance from the eye (+inf for a miss).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Hit {
+    pub prim: u32,
+    pub t: f32,
+}
+
+impl Hit {
+    pub const NONE: Hit = Hit {
+        prim: MISS,
+        t: f32::INFINITY,
+    };
+
+    pub fn is_miss(&self) -> bool {
+        self.prim == MISS
+    }
+}
+
+// SAFETY: plain-old-data with a fixed C layout, mirrored in cl/cltrace.h.
+unsafe impl ocl::OclPrm for Hit {}
+
+/// A rendered frame: per-pixel hits and RGBA8 colours (packed little-endian in a u32),
+/// row-major, `y` down.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    pub width: u32,
+    pub height: u32,
+    pub hits: Vec<Hit>,
+    pub colors: Vec<u32>,
+}
+
+impl Frame {
+    pub fn new(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        Frame {
+            width,
+            height,
+            hits: vec![Hit::NONE; n],
+            colors: vec![0; n],
+        }
+    }
+
+    pub fn hit(&self, x: u32, y: u32) -> Hit {
+        self.hits[(y * self.width + x) as usize]
+    }
+
+    /// The colours as an RGB image.
+    pub fn to_rgb_image(&self) -> image::RgbImage {
+        let bytes = self
+            .colors
+            .iter()
+            .flat_map(|c| {
+                let [r, g, b, _] = c.to_le_bytes();
+                [r, g, b]
+            })
+            .collect();
+        image::RgbImage::from_raw(self.width, self.height, bytes).expect("frame size matches")
+    }
+}

@@ -1,0 +1,65 @@
+//! Shading on the host, mirroring `shade_hit` in cl/cltrace.h.
+
+use glam::Vec3;
+
+use super::Shade;
+use crate::camera::Camera;
+use crate::geometry::Aabb;
+use crate::layout::Triangle;
+
+/// What shading needs besides the hit: the mode and, for depth, the distance range that
+/// maps to white..black (the scene's bounding sphere seen from the eye).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadeParams {
+    pub shade: Shade,
+    pub near: f32,
+    pub far: f32,
+}
+
+impl ShadeParams {
+    pub fn new(shade: Shade, camera: &Camera, bounds: &Aabb) -> Self {
+        let radius = bounds.extent().length() * 0.5;
+        let distance = (bounds.center() - camera.eye).length();
+        let near = (distance - radius).max(0.0);
+        let far = (distance + radius).max(near * 1.0001 + f32::MIN_POSITIVE);
+        ShadeParams { shade, near, far }
+    }
+
+    /// The packed RGBA colour of a hit on `tri` at `distance` along `dir`.
+    pub fn color(&self, tri: &Triangle, distance: f32, dir: Vec3) -> u32 {
+        let v0 = Vec3::from(tri.v0);
+        let e1 = Vec3::from(tri.v1) - v0;
+        let e2 = Vec3::from(tri.v2) - v0;
+        let n = Vec3::new(
+            e1.y * e2.z - e1.z * e2.y,
+            e1.z * e2.x - e1.x * e2.z,
+            e1.x * e2.y - e1.y * e2.x,
+        );
+        let n = n / (n.x * n.x + n.y * n.y + n.z * n.z).sqrt();
+        match self.shade {
+            Shade::Normal => pack_rgba(0.5 * n.x + 0.5, 0.5 * n.y + 0.5, 0.5 * n.z + 0.5),
+            Shade::Depth => {
+                let g = 1.0 - (distance - self.near) / (self.far - self.near);
+                pack_rgba(g, g, g)
+            }
+            Shade::Lambert => {
+                let d_len = (dir.x * dir.x + dir.y * dir.y + dir.z * dir.z).sqrt();
+                let c = (n.x * dir.x + n.y * dir.y + n.z * dir.z).abs() / d_len;
+                pack_rgba(c, c, c)
+            }
+        }
+    }
+}
+
+/// Black, opaque: the colour of a miss.
+pub const BACKGROUND: u32 = 0xFF00_0000;
+
+fn quantize(v: f32) -> u32 {
+    // clamp() in OpenCL returns the lower bound for NaN; so does this.
+    let v = if v > 0.0 { v.min(1.0) } else { 0.0 };
+    (v * 255.0 + 0.5) as u32
+}
+
+fn pack_rgba(r: f32, g: f32, b: f32) -> u32 {
+    quantize(r) | (quantize(g) << 8) | (quantize(b) << 16) | (255 << 24)
+}
