@@ -3,6 +3,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
+use crate::bvh::Bvh;
 use crate::mesh::Mesh;
 
 /// Marks a leaf in [`BvhNode::right_or_count`].
@@ -22,13 +23,22 @@ pub struct Triangle {
 }
 
 impl Triangle {
+    /// A stored triangle. One of zero area (its edges' cross product exactly zero, as
+    /// [`Mesh::degenerate_count`] counts them) is stored with all three corners at `v0`:
+    /// rounding could let the watertight test "hit" three distinct collinear points, but
+    /// with coinciding corners every edge function is exactly zero, and such a triangle
+    /// never hits anywhere.
     pub fn new(corners: [glam::Vec3; 3], prim: u32) -> Self {
+        let [a, mut b, mut c] = corners;
+        if (b - a).cross(c - a) == glam::Vec3::ZERO {
+            (b, c) = (a, a);
+        }
         Triangle {
-            v0: corners[0].to_array(),
+            v0: a.to_array(),
             prim,
-            v1: corners[1].to_array(),
+            v1: b.to_array(),
             pad1: 0,
-            v2: corners[2].to_array(),
+            v2: c.to_array(),
             pad2: 0,
         }
     }
@@ -62,6 +72,33 @@ impl BvhNode {
     /// A leaf's triangle count.
     pub fn count(&self) -> u32 {
         self.right_or_count & !LEAF_FLAG
+    }
+}
+
+/// The thesis's device layout: 32-byte nodes in depth-first order and the triangles
+/// reordered into leaf order, so that a leaf's triangles are contiguous.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlatBvh {
+    pub nodes: Vec<BvhNode>,
+    pub triangles: Vec<Triangle>,
+    /// Nodes on the longest root-to-leaf path; a traversal stack of `depth` entries suffices.
+    pub depth: u32,
+}
+
+impl FlatBvh {
+    pub fn new(bvh: Bvh, mesh: &Mesh) -> Self {
+        FlatBvh {
+            triangles: triangles_in_order(mesh, bvh.prim_order.iter().copied()),
+            nodes: bvh.nodes,
+            depth: bvh.depth,
+        }
+    }
+
+    /// Bytes the device holds per triangle (nodes and triangles together).
+    pub fn bytes_per_triangle(&self) -> f64 {
+        (self.nodes.len() * size_of::<BvhNode>() + self.triangles.len() * size_of::<Triangle>())
+            as f64
+            / self.triangles.len() as f64
     }
 }
 

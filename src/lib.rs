@@ -6,12 +6,14 @@
 //! - [`mesh`]: the triangle mesh every later stage reads;
 //! - [`camera`]: the pinhole camera and its exact pixel-to-ray arithmetic;
 //! - [`triangle`]: the watertight ray/triangle test (mirrored in `cl/cltrace.h`);
+//! - [`bvh`]: the SAH builders, tree statistics and the host traversal;
 //! - [`layout`]: the flat device structs the kernels read;
 //! - [`device`]: OpenCL device selection, kernel compilation, pitched images;
 //! - [`render`]: the CPU reference tracers and the OpenCL renderer;
 //! - [`output`]: images and hit records, written atomically;
 //! - [`commands`]: the subcommands the `cltrace` binary runs.
 
+pub mod bvh;
 pub mod camera;
 pub mod commands;
 pub mod device;

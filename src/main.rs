@@ -5,7 +5,8 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
 
-use cltrace::commands::{devices, render};
+use cltrace::bvh::{BuildOptions, Builder};
+use cltrace::commands::{bvh, devices, render};
 use cltrace::input::scene_file::{CameraSettings, RenderSettings};
 use cltrace::render::{Method, Shade};
 use cltrace::report::Verbosity;
@@ -40,6 +41,49 @@ enum Command {
     Render(RenderArgs),
     /// List every OpenCL platform and device, with the index `--device` accepts
     Devices,
+    /// Build a scene's BVH and print its statistics: nodes, leaves, depth, leaf sizes,
+    /// SAH cost, build time and device bytes per triangle
+    Bvh(BvhArgs),
+}
+
+#[derive(Args)]
+struct BvhArgs {
+    /// A scene file (.toml) or a mesh; the built-in default scene when omitted
+    scene: Option<PathBuf>,
+
+    #[command(flatten)]
+    build: BuildArgs,
+
+    /// Build this many times and report the fastest
+    #[arg(long, default_value_t = 1)]
+    repeat: u32,
+}
+
+/// BVH construction flags, shared by the commands that build one.
+#[derive(Args)]
+struct BuildArgs {
+    /// BVH builder: binned SAH (fast) or the exact sweep (slow, the quality reference)
+    #[arg(long, value_enum, default_value = "binned")]
+    builder: Builder,
+
+    /// Bins per axis for the binned builder (2 to 64)
+    #[arg(long, default_value_t = BuildOptions::default().bins)]
+    bins: u32,
+
+    /// Largest leaf, in triangles (1 to 255); the SAH decides below it
+    #[arg(long, default_value_t = BuildOptions::default().max_leaf_size)]
+    max_leaf_size: u32,
+}
+
+impl BuildArgs {
+    fn options(&self) -> BuildOptions {
+        BuildOptions {
+            builder: self.builder,
+            bins: self.bins,
+            max_leaf_size: self.max_leaf_size,
+            ..BuildOptions::default()
+        }
+    }
 }
 
 #[derive(Args)]
@@ -81,7 +125,7 @@ struct RenderArgs {
     #[arg(long, env = "CLTRACE_DEVICE")]
     device: Option<String>,
 
-    /// How rays find their closest hit [default: scene's, else cl-brute]
+    /// How rays find their closest hit [default: scene's, else cl-bvh]
     #[arg(long, value_enum)]
     method: Option<Method>,
 
@@ -93,11 +137,14 @@ struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     hits: Option<PathBuf>,
 
+    #[command(flatten)]
+    build: BuildArgs,
+
     /// Print nothing but errors
     #[arg(short, long, conflicts_with = "verbose")]
     quiet: bool,
 
-    /// Also print mesh, camera and device details
+    /// Also print mesh, camera, device and BVH details
     #[arg(short, long)]
     verbose: bool,
 }
@@ -120,6 +167,10 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => run_render(args),
         Command::Devices => devices::devices_table().map(|table| print!("{table}")),
+        Command::Bvh(args) => {
+            bvh::bvh_report(args.scene.as_deref(), &args.build.options(), args.repeat)
+                .map(|report| print!("{report}"))
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -149,6 +200,7 @@ fn run_render(args: RenderArgs) -> cltrace::Result<()> {
         output: args.output,
         hits: args.hits,
         device: args.device,
+        build: args.build.options(),
         verbosity,
     };
     let outcome = render::run(&request)?;

@@ -91,28 +91,32 @@ impl Mesh {
                 ));
             }
             for &v in tri {
-                let p = self.positions[v as usize];
-                if !p.is_finite() {
+                if let Some(problem) = coordinate_problem(self.positions[v as usize]) {
                     return Err(Error::input(
                         path,
-                        format!(
-                            "triangle {i} has a vertex with a NaN or infinite coordinate {:?}",
-                            p.to_array()
-                        ),
-                    ));
-                }
-                if p.abs().max_element() > MAX_COORDINATE {
-                    return Err(Error::input(
-                        path,
-                        format!(
-                            "triangle {i} has a vertex coordinate beyond +-{MAX_COORDINATE:e}: {:?}",
-                            p.to_array()
-                        ),
+                        format!("triangle {i} has a vertex with {problem}"),
                     ));
                 }
             }
         }
         Ok(())
+    }
+}
+
+/// What is wrong with a vertex no renderer can use: a NaN or infinite coordinate, or one
+/// beyond [`MAX_COORDINATE`]; `None` for a good vertex. The text completes "a vertex with ...".
+pub fn coordinate_problem(p: Vec3) -> Option<String> {
+    let xyz = p.to_array();
+    if p.is_nan() {
+        Some(format!("a NaN coordinate {xyz:?}"))
+    } else if !p.is_finite() {
+        Some(format!(
+            "an infinite coordinate {xyz:?} (beyond the f32 range)"
+        ))
+    } else if p.abs().max_element() > MAX_COORDINATE {
+        Some(format!("a coordinate beyond +-{MAX_COORDINATE:e}: {xyz:?}"))
+    } else {
+        None
     }
 }
 

@@ -1,4 +1,5 @@
 //! The subcommands, as library functions the thin binary calls.
 
+pub mod bvh;
 pub mod devices;
 pub mod render;

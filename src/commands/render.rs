@@ -4,11 +4,12 @@ use std::path::{Path, PathBuf};
 
 use indicatif::{ProgressBar, ProgressStyle};
 
+use crate::bvh::{BuildOptions, Bvh};
 use crate::camera::Camera;
 use crate::device::{ClDevice, DeviceSelector};
 use crate::error::Result;
 use crate::input::scene_file::{CameraSettings, RenderSettings, SceneDescription};
-use crate::layout::triangles_in_order;
+use crate::layout::{FlatBvh, triangles_in_order};
 use crate::mesh::Mesh;
 use crate::output;
 use crate::render::opencl::ClTracer;
@@ -16,7 +17,7 @@ use crate::render::{Frame, Method, Shade, ShadeParams, cpu};
 use crate::report::{Timings, Verbosity};
 
 /// The method when neither the scene nor the flags name one.
-pub const DEFAULT_METHOD: Method = Method::ClBrute;
+pub const DEFAULT_METHOD: Method = Method::ClBvh;
 /// The shading when neither the scene nor the flags name one.
 pub const DEFAULT_SHADE: Shade = Shade::Lambert;
 
@@ -34,6 +35,8 @@ pub struct RenderRequest {
     pub hits: Option<PathBuf>,
     /// `--device` (or `CLTRACE_DEVICE`), for OpenCL methods.
     pub device: Option<String>,
+    /// How to build the BVH, for BVH methods.
+    pub build: BuildOptions,
     pub verbosity: Verbosity,
 }
 
@@ -72,6 +75,7 @@ pub fn run(req: &RenderRequest) -> Result<RenderOutcome> {
     let shade = render.shade.unwrap_or(DEFAULT_SHADE);
 
     output::image_format(&req.output)?;
+    req.build.check()?;
     if let Some(hits) = &req.hits {
         output::check_folder(hits)?;
     }
@@ -126,11 +130,40 @@ pub fn run(req: &RenderRequest) -> Result<RenderOutcome> {
             timings.add("read-back", times.read_back_ms);
             frame
         }
-        Method::CpuBvh | Method::ClBvh => {
-            return Err(crate::error::Error::Invalid(format!(
-                "method {} is not available yet",
-                method.name()
-            )));
+        Method::CpuBvh => {
+            let bvh = build_bvh(&mesh, &req.build, v, &mut timings);
+            let bar = (v.progress() && camera.width as u64 * camera.height as u64 > 1 << 24)
+                .then(|| rows_bar(camera.height, "tracing on the CPU"));
+            let frame = timings.time("trace", || {
+                cpu::render(
+                    &bvh,
+                    &camera.pinhole(),
+                    camera.width,
+                    camera.height,
+                    &shade,
+                    bar.as_ref(),
+                )
+            });
+            if let Some(b) = bar {
+                b.finish_and_clear();
+            }
+            frame
+        }
+        Method::ClBvh => {
+            let device = device.as_ref().expect("opened above");
+            let bvh = build_bvh(&mesh, &req.build, v, &mut timings);
+            let program = timings.time("compile", || ClTracer::compile_bvh(device, bvh.depth))?;
+            let mut tracer = timings.time("upload", || ClTracer::bvh(device, &program, &bvh))?;
+            let (frame, times) = tracer.render(
+                &camera.pinhole(),
+                camera.width,
+                camera.height,
+                &shade,
+                v.progress(),
+            )?;
+            timings.add("kernel", times.kernel_ms);
+            timings.add("read-back", times.read_back_ms);
+            frame
         }
     };
 
@@ -147,6 +180,22 @@ pub fn run(req: &RenderRequest) -> Result<RenderOutcome> {
         device: device.map(|d| d.info.name),
         timings,
     })
+}
+
+/// Builds the BVH and its flat layout, timed as "build", with details under `--verbose`.
+fn build_bvh(mesh: &Mesh, options: &BuildOptions, v: Verbosity, timings: &mut Timings) -> FlatBvh {
+    let bvh = timings.time("build", || Bvh::build(mesh, options));
+    let stats = bvh.stats();
+    v.detail(format!(
+        "bvh: {} nodes, {} leaves, depth {}, mean leaf {:.2}, SAH cost {:.2}, {} threads",
+        stats.nodes,
+        stats.leaves,
+        stats.depth,
+        stats.mean_leaf_size,
+        stats.sah_cost,
+        rayon::current_num_threads()
+    ));
+    timings.time("layout", || FlatBvh::new(bvh, mesh))
 }
 
 fn trace_cpu_brute(

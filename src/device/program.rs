@@ -15,6 +15,8 @@ const INCLUDE_LINE: &str = "#include \"cltrace.h\"";
 pub enum KernelSource {
     /// `brute.cl`: every ray against every triangle.
     Brute,
+    /// `bvh.cl`: BVH traversal with a per-work-item stack (needs `STACK_SIZE`).
+    Bvh,
     /// `probe.cl`: reports the shared structs' layout.
     Probe,
 }
@@ -23,6 +25,7 @@ impl KernelSource {
     pub fn file_name(self) -> &'static str {
         match self {
             KernelSource::Brute => "brute.cl",
+            KernelSource::Bvh => "bvh.cl",
             KernelSource::Probe => "probe.cl",
         }
     }
@@ -30,6 +33,7 @@ impl KernelSource {
     fn text(self) -> &'static str {
         match self {
             KernelSource::Brute => include_str!("../../cl/brute.cl"),
+            KernelSource::Bvh => include_str!("../../cl/bvh.cl"),
             KernelSource::Probe => include_str!("../../cl/probe.cl"),
         }
     }
@@ -105,7 +109,7 @@ mod tests {
 
     #[test]
     fn header_is_spliced_into_every_kernel() {
-        for k in [KernelSource::Brute, KernelSource::Probe] {
+        for k in [KernelSource::Brute, KernelSource::Bvh, KernelSource::Probe] {
             let s = k.source();
             assert!(s.contains("typedef struct"), "{}", k.file_name());
             assert!(!s.contains(INCLUDE_LINE), "{}", k.file_name());

@@ -237,7 +237,14 @@ fn flake(
         .chain((0..3).map(|k| (35f32.to_radians(), TAU / 12.0 + k as f32 * TAU / 3.0)));
     for (polar, azimuth) in directions {
         let d = axis * polar.cos() + (u * azimuth.cos() + v * azimuth.sin()) * polar.sin();
-        flake(add, center + d * (radius + child), child, d, generation + 1, levels);
+        flake(
+            add,
+            center + d * (radius + child),
+            child,
+            d,
+            generation + 1,
+            levels,
+        );
     }
 }
 

@@ -1,15 +1,29 @@
 //! Wavefront OBJ through `tobj`: polygons fan-triangulated, every object and group merged
 //! into one triangle list in file order.
 
+use std::borrow::Cow;
 use std::io::Cursor;
 use std::path::Path;
 
 use glam::Vec3;
 
 use crate::error::{Error, Result};
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, coordinate_problem};
 
 pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
+    // A UTF-8 byte order mark would hide the first line's keyword from tobj, and a first
+    // `v` line dropped that way shifts every index after it.
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    if let Some(nul) = bytes.iter().position(|&b| b == 0) {
+        let line = 1 + bytes[..nul].iter().filter(|&&b| b == b'\n').count();
+        return Err(Error::input_at(
+            path,
+            line,
+            "the file holds NUL bytes: binary data or UTF-16 text, not OBJ text",
+        ));
+    }
+    let text = positions_only(bytes);
+    let bytes: &[u8] = &text;
     let options = tobj::LoadOptions {
         single_index: true,
         triangulate: true,
@@ -36,7 +50,113 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
                 .map(|t| [t[0] + offset, t[1] + offset, t[2] + offset]),
         );
     }
+    check_positions(path, bytes, &mesh)?;
     Ok(mesh)
+}
+
+/// The text tobj is given: what cltrace reads (positions and faces) with every line kept
+/// in place, so that line numbers stay right. Texture coordinates, normals and materials
+/// are blanked out and face references cut to their vertex index: tobj checks `vt`/`vn`
+/// references with arithmetic that overflows (a panic in debug builds) on `f 1/0 2/0 3/0`,
+/// and fails on a `usemtl` without a name. Vertex colours are dropped too: tobj refuses a
+/// file where only some vertices have them.
+fn positions_only(bytes: &[u8]) -> Cow<'_, [u8]> {
+    let mut out: Option<Vec<u8>> = None;
+    let mut done = 0;
+    for line in bytes.split_inclusive(|&b| b == b'\n') {
+        match (rewrite_line(line), &mut out) {
+            (None, Some(out)) => out.extend_from_slice(line),
+            (None, None) => {}
+            (Some(new), out) => out
+                .get_or_insert_with(|| {
+                    let mut v = Vec::with_capacity(bytes.len());
+                    v.extend_from_slice(&bytes[..done]);
+                    v
+                })
+                .extend_from_slice(&new),
+        }
+        done += line.len();
+    }
+    match out {
+        Some(out) => Cow::Owned(out),
+        None => Cow::Borrowed(bytes),
+    }
+}
+
+/// The replacement for one line (ending in a newline), or `None` to keep it.
+fn rewrite_line(line: &[u8]) -> Option<Vec<u8>> {
+    let mut words = line
+        .split(|b| b.is_ascii_whitespace())
+        .filter(|w| !w.is_empty());
+    let keyword = words.next()?;
+    match keyword {
+        b"vt" | b"vn" | b"usemtl" | b"mtllib" => Some(b"\n".to_vec()),
+        b"f" | b"l" if line.contains(&b'/') => {
+            let mut new = keyword.to_vec();
+            for w in words {
+                new.push(b' ');
+                match w.split(|&b| b == b'/').next() {
+                    // `/2` has no vertex index: keep it whole for tobj to refuse
+                    Some(v) if !v.is_empty() => new.extend_from_slice(v),
+                    _ => new.extend_from_slice(w),
+                }
+            }
+            new.push(b'\n');
+            Some(new)
+        }
+        // `v x y z r g b`: keep `v x y z`
+        b"v" if words.clone().count() == 6 => {
+            let mut new = keyword.to_vec();
+            for w in words.take(3) {
+                new.push(b' ');
+                new.extend_from_slice(w);
+            }
+            new.push(b'\n');
+            Some(new)
+        }
+        _ => None,
+    }
+}
+
+/// Refuses a NaN, infinite or too large vertex that a triangle uses, naming its line.
+/// tobj does not say which line a vertex came from, so the first `v` line with the same
+/// value is taken; [`Mesh::check`] still catches anything this misses.
+fn check_positions(path: &Path, bytes: &[u8], mesh: &Mesh) -> Result<()> {
+    let Some((bad, problem)) = mesh.triangles.iter().flatten().find_map(|&v| {
+        let p = mesh.positions[v as usize];
+        coordinate_problem(p).map(|problem| (p, problem))
+    }) else {
+        return Ok(());
+    };
+    let same = |p: Vec3| {
+        p.to_array()
+            .iter()
+            .zip(bad.to_array())
+            .all(|(&a, b)| a == b || (a.is_nan() && b.is_nan()))
+    };
+    let found = first_line(bytes, |words| {
+        (words.first() == Some(&"v") && parse_vertex(&words[1..]).is_some_and(same))
+            .then(|| format!("vertex with {problem}"))
+    });
+    match found {
+        Some((line, message)) => Err(Error::input_at(path, line, message)),
+        None => Ok(()),
+    }
+}
+
+/// A `v` line's position as tobj computes it: `x y z`, divided by `w` when there is one.
+fn parse_vertex(words: &[&str]) -> Option<Vec3> {
+    let numbers: Vec<f32> = words
+        .iter()
+        .take(4)
+        .map(|w| w.parse::<f32>())
+        .collect::<std::result::Result<_, _>>()
+        .ok()?;
+    match (numbers.as_slice(), words.len()) {
+        ([x, y, z, w], 4) => Some(Vec3::new(x / w, y / w, z / w)),
+        ([x, y, z, ..], _) => Some(Vec3::new(*x, *y, *z)),
+        _ => None,
+    }
 }
 
 /// Turns a `tobj` error into one line naming the file and, by scanning the text again,
@@ -45,10 +165,12 @@ fn describe(path: &Path, bytes: &[u8], err: tobj::LoadError) -> Error {
     use tobj::LoadError::*;
     let found = match err {
         ReadError => not_utf8(bytes).map(|line| (line, "the file is not UTF-8 text".to_string())),
-        PositionParseError => first_line(bytes, |words| {
-            (words.first() == Some(&"v") && !vertex_ok(&words[1..]))
-                .then(|| "a vertex needs three numbers, as `v x y z`".to_string())
-        }),
+        PositionParseError | ScalingByZeroError | ColorParseError => {
+            first_line(bytes, |words| match words.first() {
+                Some(&"v") => vertex_problem(&words[1..]),
+                _ => None,
+            })
+        }
         FaceParseError | FaceVertexOutOfBounds => bad_face(bytes),
         _ => None,
     };
@@ -58,8 +180,20 @@ fn describe(path: &Path, bytes: &[u8], err: tobj::LoadError) -> Error {
     }
 }
 
-fn vertex_ok(words: &[&str]) -> bool {
-    words.len() >= 3 && words[..3].iter().all(|w| w.parse::<f32>().is_ok())
+/// Why tobj refuses a `v` line with these words after the `v`, if it does: it takes
+/// `x y z`, `x y z w` (w not 0) or `x y z r g b`.
+fn vertex_problem(words: &[&str]) -> Option<String> {
+    let numbers = |ws: &[&str]| ws.iter().all(|w| w.parse::<f32>().is_ok());
+    if words.len() < 3 || !numbers(&words[..3]) || !matches!(words.len(), 3 | 4 | 6) {
+        return Some("a vertex needs three numbers, as `v x y z`".to_string());
+    }
+    match words.get(3).map(|w| w.parse::<f32>()) {
+        Some(Err(_)) if words.len() == 4 => {
+            Some(format!("vertex weight `{}` is not a number", words[3]))
+        }
+        Some(Ok(w)) if words.len() == 4 && w == 0.0 => Some("vertex weight w is 0".to_string()),
+        _ => None,
+    }
 }
 
 /// Calls `check` with the words of each line; the first `Some` gives (1-based line, message).

@@ -5,24 +5,27 @@ use std::io::{BufReader, Cursor};
 use std::path::Path;
 
 use glam::Vec3;
-use ply_rs_bw::parser::{Parser, Reader};
-use ply_rs_bw::ply::{Property, PropertyAccess, PropertyAccessResult};
+use ply_rs_bw::parser::{ParseError, Parser, Reader};
+use ply_rs_bw::ply::{Encoding, Property, PropertyAccess, PropertyAccessResult};
 
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 
 pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
-    let fail = |e: ply_rs_bw::parser::ParseError| match e.line() {
-        Some(line) => Error::input_at(path, line, first_line_of(&e.to_string())),
-        None => Error::input(
-            path,
-            format!("cannot parse PLY: {}", first_line_of(&e.to_string())),
-        ),
-    };
     let mut reader = Reader::new(BufReader::new(Cursor::new(bytes)));
     let header = Parser::<Vertex>::new()
         .read_header(&mut reader)
-        .map_err(fail)?;
+        .map_err(|e| describe(path, e, true))?;
+    // Lines mean something in the header and in an ASCII body, not in a binary one.
+    let fail = |e| describe(path, e, header.encoding == Encoding::Ascii);
+    for needed in ["vertex", "face"] {
+        if !header.elements.contains_key(needed) {
+            return Err(Error::input(
+                path,
+                format!("the PLY header declares no `{needed}` element, so there are no triangles"),
+            ));
+        }
+    }
 
     let mut vertices = Vec::new();
     let mut faces = Vec::new();
@@ -83,8 +86,64 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
     Ok(Mesh::new(positions, triangles))
 }
 
-fn first_line_of(text: &str) -> String {
-    text.lines().next().unwrap_or("").trim().to_string()
+/// One line for a `ply-rs-bw` error, at its line where `lines` (the text it read is lines
+/// of text, not binary data).
+fn describe(path: &Path, e: ParseError, lines: bool) -> Error {
+    let text = e.to_string();
+    // The error's Display puts "Line N: " in front; the line goes in our own prefix.
+    let text = match e.line() {
+        Some(line) => text
+            .strip_prefix(&format!("Line {line}: "))
+            .unwrap_or(&text)
+            .to_string(),
+        None => text,
+    };
+    let message = one_line(&text);
+    match e.line() {
+        Some(line) if lines => Error::input_at(path, line, message),
+        _ => Error::input(path, format!("cannot parse PLY: {message}")),
+    }
+}
+
+/// `ply-rs-bw` messages come in tab-indented parts: the summary, `String: 'the line'` and
+/// `Error: ...` details. This keeps the summary, the offending text (shortened) and the
+/// readable details, and drops the parser generator's internals, all on one line.
+fn one_line(text: &str) -> String {
+    let mut parts = Vec::new();
+    for part in text.split("\n\t") {
+        let part = part.trim();
+        if part.starts_with("Error: ParseError {") {
+            continue;
+        }
+        match part.strip_prefix("String: ") {
+            Some(quoted) => {
+                let inner = quoted.trim_matches('\'').trim();
+                let short: String = inner.chars().take(60).collect();
+                let more = if inner.chars().count() > 60 {
+                    "..."
+                } else {
+                    ""
+                };
+                let quoted = format!("`{short}{more}`");
+                // nested errors quote the same line again
+                if !parts.contains(&quoted) {
+                    parts.push(quoted);
+                }
+            }
+            None => parts.push(part.to_string()),
+        }
+    }
+    let joined = parts.join(" ");
+    let clean: String = joined
+        .chars()
+        .map(|c| if c.is_control() { ' ' } else { c })
+        .collect();
+    let words: Vec<&str> = clean.split_whitespace().collect();
+    let mut message: String = words.join(" ").chars().take(300).collect();
+    while message.ends_with(',') {
+        message.pop();
+    }
+    message
 }
 
 /// Any numeric property as a float, so that double or integer coordinates work too.

@@ -11,8 +11,8 @@ use ocl::prm::Float4;
 use super::{Frame, Hit, ShadeParams};
 use crate::camera::Pinhole;
 use crate::device::{ClDevice, KernelSource, PitchedBuffer};
-use crate::error::Result;
-use crate::layout::Triangle;
+use crate::error::{Error, Result};
+use crate::layout::{BvhNode, FlatBvh, Triangle};
 
 /// Default bound on one kernel launch, in milliseconds of device time.
 pub const LAUNCH_TARGET_MS: f64 = 100.0;
@@ -34,7 +34,11 @@ pub struct ClTracer<'d> {
     /// Index of the first camera argument; the scene's buffers come before it.
     first_camera_arg: u32,
     bands: BandPlanner,
-    _scene: Vec<ocl::Buffer<Triangle>>,
+    /// The scene on the device, kept alive as long as the kernel that reads it.
+    _triangles: ocl::Buffer<Triangle>,
+    _nodes: Option<ocl::Buffer<BvhNode>>,
+    /// The BVH kernel's error flags; bit 0: a traversal stack overflowed.
+    status: Option<ocl::Buffer<u32>>,
 }
 
 /// Sizes bands of rows so that each launch takes about [`LAUNCH_TARGET_MS`].
@@ -95,7 +99,51 @@ impl<'d> ClTracer<'d> {
                 // About 16 million ray/triangle tests in the first launch.
                 first_band_pixels: (1usize << 24) / triangles.len().max(1),
             },
-            _scene: vec![tris],
+            _triangles: tris,
+            _nodes: None,
+            status: None,
+        })
+    }
+
+    /// Compiles the BVH kernel with a traversal stack as deep as the tree.
+    pub fn compile_bvh(device: &'d ClDevice, depth: u32) -> Result<ocl::Program> {
+        device.build(
+            KernelSource::Bvh,
+            &[("STACK_SIZE", depth.max(1).to_string())],
+        )
+    }
+
+    /// Uploads the flat BVH for the BVH kernel.
+    pub fn bvh(device: &'d ClDevice, program: &ocl::Program, bvh: &FlatBvh) -> Result<Self> {
+        let nodes = upload(device, &bvh.nodes, "uploading BVH nodes")?;
+        let tris = upload(device, &bvh.triangles, "uploading triangles")?;
+        let status = ocl::Buffer::<u32>::builder()
+            .queue(device.queue.clone())
+            .flags(ocl::flags::MEM_READ_WRITE)
+            .len(1)
+            .build()
+            .map_err(|e| device.error("allocating the status flag", e))?;
+        let kernel = ocl::Kernel::builder()
+            .program(program)
+            .name("trace_bvh")
+            .queue(device.queue.clone())
+            .arg(&nodes)
+            .arg(&tris)
+            .arg(&status)
+            .args_for_frame()
+            .build()
+            .map_err(|e| device.error("creating the trace_bvh kernel", e))?;
+        Ok(ClTracer {
+            device,
+            kernel,
+            first_camera_arg: 3,
+            bands: BandPlanner {
+                rate: None,
+                first_band_pixels: 1 << 16,
+            },
+            _triangles: tris,
+            _nodes: Some(nodes),
+            status: Some(status),
         })
     }
 
@@ -134,6 +182,12 @@ impl<'d> ClTracer<'d> {
         set(a + 12, k.set_arg(a + 12, &colors.buffer))?;
         set(a + 13, k.set_arg(a + 13, colors.pitch as u32))?;
 
+        if let Some(status) = &self.status {
+            status
+                .write(&[0u32][..])
+                .enq()
+                .map_err(|e| device.error("clearing the status flag", e))?;
+        }
         let local = local_size(device);
         let mut frame = Frame::new(width, height);
         let mut times = DeviceTimes::default();
@@ -193,6 +247,19 @@ impl<'d> ClTracer<'d> {
         }
         if let Some(b) = bar {
             b.finish_and_clear();
+        }
+        if let Some(status) = &self.status {
+            let mut flags = [0u32];
+            status
+                .read(&mut flags[..])
+                .enq()
+                .map_err(|e| device.error("reading the kernel's status", e))?;
+            if flags[0] != 0 {
+                return Err(Error::Device(format!(
+                    "the BVH kernel on {} overflowed its traversal stack (status {:#x}): the image would be wrong, so none was written",
+                    device.info.name, flags[0]
+                )));
+            }
         }
         Ok((frame, times))
     }

@@ -1,0 +1,826 @@
+//! Top-down SAH construction.
+//!
+//! Each node's triangles are split in two by a plane chosen under the surface area
+//! heuristic: binned over centroids on all three axes (Wald, "On fast Construction of
+//! SAH-based Bounding Volume Hierarchies", 2007), or by an exact sweep over every
+//! centroid-sorted position. Large nodes bin in parallel and subtrees build in parallel.
+//!
+//! Nodes are stored in depth-first order as they are made. Large nodes split and hand
+//! their two halves to parallel tasks; each task writes its subtree into its own compact
+//! vector, and one pass at the end lays the tasks' vectors out behind the few shared top
+//! nodes, shifting child indices. Memory is touched once per node: on a virtual machine a
+//! fresh page costs microseconds, so untouched slack is worth more than it seems.
+
+use glam::Vec3A;
+use rayon::prelude::*;
+
+use super::{BuildOptions, Builder, Bvh, INTERSECTION_COST, TRAVERSAL_COST};
+use crate::layout::{BvhNode, LEAF_FLAG};
+use crate::mesh::Mesh;
+
+/// Nodes with more triangles than this build their two subtrees in parallel.
+const PARALLEL_SUBTREES: usize = 1 << 14;
+/// Nodes with more triangles than this bin in parallel chunks.
+const PARALLEL_BINNING: usize = 1 << 16;
+/// The most bins per axis [`BuildOptions::bins`] may ask for (a power of two).
+pub(super) const MAX_BINS: usize = 64;
+
+/// An axis-aligned box in SIMD lanes (the fourth lane unused).
+#[derive(Clone, Copy, Debug)]
+struct Bounds {
+    min: Vec3A,
+    max: Vec3A,
+}
+
+impl Bounds {
+    const EMPTY: Bounds = Bounds {
+        min: Vec3A::splat(f32::INFINITY),
+        max: Vec3A::splat(f32::NEG_INFINITY),
+    };
+
+    #[inline]
+    fn union(self, o: Bounds) -> Bounds {
+        Bounds {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
+    }
+
+    #[inline]
+    fn grow(&mut self, p: Vec3A) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    /// Half the surface area: the SAH only compares areas, so the factor 2 is dropped.
+    #[inline]
+    fn half_area(&self) -> f32 {
+        let e = (self.max - self.min).max(Vec3A::ZERO);
+        e.x * e.y + e.y * e.z + e.z * e.x
+    }
+
+    #[inline]
+    fn centroid(&self) -> Vec3A {
+        (self.min + self.max) * 0.5
+    }
+
+    fn node(&self, left_or_first: u32, right_or_count: u32) -> BvhNode {
+        BvhNode {
+            min: self.min.to_array(),
+            left_or_first,
+            max: self.max.to_array(),
+            right_or_count,
+        }
+    }
+}
+
+/// The triangles of one node: their boxes and mesh indices, permuted together.
+struct Prims<'a> {
+    boxes: &'a mut [Bounds],
+    ids: &'a mut [u32],
+    /// Position of `boxes[0]` in the whole leaf order.
+    first: u32,
+}
+
+impl Prims<'_> {
+    fn len(&self) -> usize {
+        self.boxes.len()
+    }
+
+    fn split_at(self, mid: usize) -> (Self, Self) {
+        let (lb, rb) = self.boxes.split_at_mut(mid);
+        let (li, ri) = self.ids.split_at_mut(mid);
+        (
+            Prims {
+                boxes: lb,
+                ids: li,
+                first: self.first,
+            },
+            Prims {
+                boxes: rb,
+                ids: ri,
+                first: self.first + mid as u32,
+            },
+        )
+    }
+
+    fn swap(&mut self, a: usize, b: usize) {
+        self.boxes.swap(a, b);
+        self.ids.swap(a, b);
+    }
+
+    /// Box and centroid box of all the triangles.
+    fn bounds(&self) -> Side {
+        let fold = |(b, c): (Bounds, Bounds), p: &Bounds| {
+            let mut c = c;
+            c.grow(p.centroid());
+            (b.union(*p), c)
+        };
+        let empty = (Bounds::EMPTY, Bounds::EMPTY);
+        if self.len() > PARALLEL_BINNING {
+            self.boxes
+                .par_chunks(1 << 14)
+                .map(|c| c.iter().fold(empty, fold))
+                .reduce(|| empty, |(a, b), (c, d)| (a.union(c), b.union(d)))
+        } else {
+            self.boxes.iter().fold(empty, fold)
+        }
+    }
+}
+
+/// A child's box and the box of its triangles' centroids.
+type Side = (Bounds, Bounds);
+
+/// The outcome of looking for a split.
+enum Split {
+    /// Make a leaf: cheaper than any split (only offered when the node may be a leaf).
+    Leaf,
+    /// Triangles `[0, mid)` go left, with the children's boxes and centroid boxes.
+    At { mid: usize, left: Side, right: Side },
+    /// No plane separates the centroids: split by count instead.
+    None,
+}
+
+struct Ctx {
+    options: BuildOptions,
+}
+
+/// Working memory reused from node to node (one per thread of the build), so that the
+/// millions of small nodes allocate nothing.
+struct Scratch {
+    bins: BinTable,
+    order: Vec<u32>,
+    keys: Vec<u64>,
+    right_area: Vec<f32>,
+    boxes: Vec<Bounds>,
+    ids: Vec<u32>,
+}
+
+impl Scratch {
+    fn new(bins: usize) -> Self {
+        Scratch {
+            bins: BinTable::new(bins),
+            order: Vec::new(),
+            keys: Vec::new(),
+            right_area: Vec::new(),
+            boxes: Vec::new(),
+            ids: Vec::new(),
+        }
+    }
+}
+
+pub(super) fn build(mesh: &Mesh, options: &BuildOptions) -> Bvh {
+    let n = mesh.triangle_count();
+    assert!(n > 0, "a checked mesh has triangles");
+    let mut boxes: Vec<Bounds> = (0..n)
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|i| {
+            let [a, b, c] = mesh.corners(i).map(Vec3A::from);
+            Bounds {
+                min: a.min(b).min(c),
+                max: a.max(b).max(c),
+            }
+        })
+        .collect();
+    let mut ids: Vec<u32> = (0..n as u32).into_par_iter().collect();
+    let prims = Prims {
+        boxes: &mut boxes,
+        ids: &mut ids,
+        first: 0,
+    };
+    let bounds = prims.bounds();
+    let ctx = Ctx { options: *options };
+    let (tree, depth) = ctx.top(prims, bounds, 1, &mut Scratch::new(options.bins as usize));
+    // Zeroed memory comes from the system untouched, so the pages are first touched (and
+    // paid for) by the parallel writers, not here.
+    let mut nodes: Vec<BvhNode> = bytemuck::zeroed_vec(tree.node_count());
+    tree.lay_out(&mut nodes, 0);
+    Bvh {
+        nodes,
+        prim_order: ids,
+        depth,
+    }
+}
+
+/// The tree as the parallel build leaves it: shared top nodes over tasks' subtrees.
+enum Subtree {
+    /// A task's subtree, compact and depth-first, child indices counted from its start.
+    Nodes(Vec<BvhNode>),
+    /// A top node (its child indices not yet known), its two halves, and its node count.
+    Split(BvhNode, Box<(Subtree, Subtree)>, usize),
+}
+
+impl Subtree {
+    fn split(node: BvhNode, left: Subtree, right: Subtree) -> Self {
+        let count = 1 + left.node_count() + right.node_count();
+        Subtree::Split(node, Box::new((left, right)), count)
+    }
+
+    fn node_count(&self) -> usize {
+        match self {
+            Subtree::Nodes(v) => v.len(),
+            Subtree::Split(.., count) => *count,
+        }
+    }
+
+    /// Writes the subtree depth-first into `out` (exactly its size), whose first node has
+    /// global index `offset`; the halves of top nodes are written in parallel.
+    fn lay_out(self, out: &mut [BvhNode], offset: u32) {
+        match self {
+            Subtree::Nodes(v) => {
+                for (slot, mut node) in out.iter_mut().zip(v) {
+                    if !node.is_leaf() {
+                        node.left_or_first += offset;
+                        node.right_or_count += offset;
+                    }
+                    *slot = node;
+                }
+            }
+            Subtree::Split(mut node, halves, _) => {
+                let (left, right) = *halves;
+                let left_count = left.node_count();
+                node.left_or_first = offset + 1;
+                node.right_or_count = offset + 1 + left_count as u32;
+                out[0] = node;
+                let (lo, ro) = out[1..].split_at_mut(left_count);
+                rayon::join(
+                    || left.lay_out(lo, offset + 1),
+                    || right.lay_out(ro, offset + 1 + left_count as u32),
+                );
+            }
+        }
+    }
+}
+
+impl Ctx {
+    /// Builds the subtree over `prims` at `depth` (the root is 1), in parallel while it is
+    /// large. Returns it and its deepest level.
+    fn top(
+        &self,
+        mut prims: Prims,
+        bounds: Side,
+        depth: u32,
+        scratch: &mut Scratch,
+    ) -> (Subtree, u32) {
+        if prims.len() <= PARALLEL_SUBTREES {
+            let mut nodes = Vec::with_capacity(2 * prims.len());
+            let depth = self.node(prims, bounds, depth, &mut nodes, scratch);
+            return (Subtree::Nodes(nodes), depth);
+        }
+        let Some((mid, left, right)) = self.split(&mut prims, bounds, depth, scratch) else {
+            let leaf = bounds.0.node(prims.first, LEAF_FLAG | prims.len() as u32);
+            return (Subtree::Nodes(vec![leaf]), depth);
+        };
+        let (lp, rp) = prims.split_at(mid);
+        let ((l, dl), (r, dr)) = rayon::join(
+            || self.top(lp, left, depth + 1, scratch),
+            || {
+                self.top(
+                    rp,
+                    right,
+                    depth + 1,
+                    &mut Scratch::new(self.options.bins as usize),
+                )
+            },
+        );
+        (Subtree::split(bounds.0.node(0, 0), l, r), dl.max(dr))
+    }
+
+    /// Builds the subtree over `prims` at `depth` onto the end of `out`, depth-first with
+    /// indices counted from `out`'s start. Returns the subtree's deepest level.
+    fn node(
+        &self,
+        mut prims: Prims,
+        bounds: Side,
+        depth: u32,
+        out: &mut Vec<BvhNode>,
+        scratch: &mut Scratch,
+    ) -> u32 {
+        let index = out.len();
+        match self.split(&mut prims, bounds, depth, scratch) {
+            None => {
+                out.push(bounds.0.node(prims.first, LEAF_FLAG | prims.len() as u32));
+                depth
+            }
+            Some((mid, left, right)) => {
+                out.push(bounds.0.node(index as u32 + 1, 0));
+                let (lp, rp) = prims.split_at(mid);
+                let dl = self.node(lp, left, depth + 1, out, scratch);
+                out[index].right_or_count = out.len() as u32;
+                let dr = self.node(rp, right, depth + 1, out, scratch);
+                dl.max(dr)
+            }
+        }
+    }
+
+    /// Decides a node: `None` for a leaf, else the split position with both children's
+    /// boxes and centroid boxes (the triangles reordered to match).
+    fn split(
+        &self,
+        prims: &mut Prims,
+        (bounds, centroids): Side,
+        depth: u32,
+        scratch: &mut Scratch,
+    ) -> Option<(usize, Side, Side)> {
+        let n = prims.len();
+        let max_leaf = self.options.max_leaf_size as usize;
+        let max_depth = self.options.max_depth;
+        if n == 1 || depth >= max_depth {
+            return None;
+        }
+        // Median splits from depth d reach leaves by d + ceil(log2(n / max_leaf)): switch to
+        // them while that still fits under the maximum depth.
+        let balanced_depth = depth + n.div_ceil(max_leaf).next_power_of_two().trailing_zeros();
+        let split = if balanced_depth + 1 >= max_depth {
+            Split::None
+        } else {
+            match self.options.builder {
+                Builder::Binned if n > SMALL => {
+                    self.binned_split(prims, bounds, centroids, n <= max_leaf, &mut scratch.bins)
+                }
+                _ if n <= SMALL => small_sweep_split(prims, bounds, n <= max_leaf),
+                _ => sweep_split(prims, bounds, n <= max_leaf, scratch),
+            }
+        };
+        match split {
+            Split::Leaf => None,
+            Split::At { mid, left, right } => Some((mid, left, right)),
+            Split::None if n <= max_leaf => None,
+            Split::None => Some(median_split(prims, centroids, scratch)),
+        }
+    }
+
+    /// Bins the centroids on all three axes, picks the cheapest plane between bins, and
+    /// partitions the triangles in place.
+    fn binned_split(
+        &self,
+        prims: &mut Prims,
+        bounds: Bounds,
+        centroids: Bounds,
+        may_be_leaf: bool,
+        table: &mut BinTable,
+    ) -> Split {
+        // Small nodes use fewer bins: a few triangles gain nothing from many planes.
+        let bins = (self.options.bins as usize).min((prims.len() / 4).max(8));
+        table.reset(bins);
+        let extent = centroids.max - centroids.min;
+        // Slightly under `bins / extent`, so the largest centroid still lands in the last
+        // bin. An extent so thin that the scale overflows counts as flat.
+        let scale = Vec3A::splat(bins as f32 * (1.0 - 1e-6)) / extent;
+        let usable = extent.cmpgt(Vec3A::ZERO) & scale.is_finite_mask();
+        let scale = Vec3A::select(usable, scale, Vec3A::ZERO);
+        let extent = Vec3A::select(usable, extent, Vec3A::ZERO);
+        let last = Vec3A::splat((bins - 1) as f32);
+        let bin_of = |p: &Bounds| -> [u8; 3] {
+            let k = ((p.centroid() - centroids.min) * scale).min(last);
+            // SAFETY: every lane is finite and in [0, bins - 1], within u8: centroids are
+            // finite and at least `centroids.min`, the scale is finite and non-negative, and
+            // `min` clamps to `bins - 1`.
+            unsafe {
+                [
+                    k.x.to_int_unchecked::<u8>(),
+                    k.y.to_int_unchecked::<u8>(),
+                    k.z.to_int_unchecked::<u8>(),
+                ]
+            }
+        };
+
+        if prims.len() > PARALLEL_BINNING {
+            *table = prims
+                .boxes
+                .par_chunks(1 << 14)
+                .map(|chunk| {
+                    let mut t = BinTable::new(bins);
+                    t.add(chunk, &bin_of);
+                    t
+                })
+                .reduce(|| BinTable::new(bins), BinTable::merged);
+        } else {
+            table.add(prims.boxes, &bin_of);
+        }
+
+        // For each axis, sweep the planes between bins: right-to-left areas first, then
+        // left-to-right to price each plane.
+        let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, first bin on the right)
+        for axis in 0..3 {
+            if extent[axis] <= 0.0 {
+                continue;
+            }
+            let (boxes, counts, right_area) = table.axis_mut(axis);
+            let mut acc = Bounds::EMPTY;
+            for k in (1..bins).rev() {
+                acc = acc.union(boxes[k]);
+                right_area[k] = acc.half_area();
+            }
+            let total: u32 = counts.iter().sum();
+            let mut left = Bounds::EMPTY;
+            let mut left_count = 0u32;
+            for k in 1..bins {
+                left = left.union(boxes[k - 1]);
+                left_count += counts[k - 1];
+                let right_count = total - left_count;
+                if left_count == 0 || right_count == 0 {
+                    continue;
+                }
+                let cost =
+                    left.half_area() * left_count as f32 + right_area[k] * right_count as f32;
+                if best.is_none_or(|(c, _, _)| cost < c) {
+                    best = Some((cost, axis, k));
+                }
+            }
+        }
+        let Some((cost, axis, split_bin)) = best else {
+            return Split::None;
+        };
+        if may_be_leaf && leaf_is_cheaper(prims.len(), bounds.half_area(), cost) {
+            return Split::Leaf;
+        }
+
+        // Partition: bin < split_bin goes left. The children's boxes come from the bins;
+        // their centroid boxes are gathered on the way.
+        let (boxes, _) = table.axis(axis);
+        let left_box = boxes[..split_bin]
+            .iter()
+            .fold(Bounds::EMPTY, |a, b| a.union(*b));
+        let right_box = boxes[split_bin..]
+            .iter()
+            .fold(Bounds::EMPTY, |a, b| a.union(*b));
+        // floor(f) < split_bin exactly when f < split_bin, f being the same lane product the
+        // binning floored.
+        let plane = split_bin as f32;
+        let (i, lc, rc) = match axis {
+            0 => partition(prims, |p| {
+                ((p.centroid() - centroids.min) * scale).x < plane
+            }),
+            1 => partition(prims, |p| {
+                ((p.centroid() - centroids.min) * scale).y < plane
+            }),
+            _ => partition(prims, |p| {
+                ((p.centroid() - centroids.min) * scale).z < plane
+            }),
+        };
+        Split::At {
+            mid: i,
+            left: (left_box, lc),
+            right: (right_box, rc),
+        }
+    }
+}
+
+/// Moves the triangles for which `goes_left` holds to the front, without branches
+/// (Lomuto's scheme with an unconditional swap: data-dependent branches mispredict half
+/// the time near the root). Returns the left count and both sides' centroid boxes.
+#[inline]
+fn partition(prims: &mut Prims, goes_left: impl Fn(&Bounds) -> bool) -> (usize, Bounds, Bounds) {
+    let (mut lc, mut rc) = (Bounds::EMPTY, Bounds::EMPTY);
+    let mut left = 0;
+    for i in 0..prims.len() {
+        let p = prims.boxes[i];
+        let c = p.centroid();
+        let is_left = goes_left(&p);
+        let mask = glam::BVec3A::splat(is_left);
+        lc.min = Vec3A::select(mask, lc.min.min(c), lc.min);
+        lc.max = Vec3A::select(mask, lc.max.max(c), lc.max);
+        rc.min = Vec3A::select(mask, rc.min, rc.min.min(c));
+        rc.max = Vec3A::select(mask, rc.max, rc.max.max(c));
+        prims.swap(i, left);
+        left += is_left as usize;
+    }
+    (left, lc, rc)
+}
+
+/// Whether keeping `n` triangles in a leaf costs no more than splitting them, given the
+/// split's `sum of half-area * count` over both children and the node's half-area.
+fn leaf_is_cheaper(n: usize, half_area: f32, split: f32) -> bool {
+    INTERSECTION_COST * n as f32 * half_area
+        <= TRAVERSAL_COST * half_area + INTERSECTION_COST * split
+}
+
+/// Per-axis bins: the box of the triangles whose centroid falls in each bin, and their
+/// count; `bins` of the allocated [`MAX_BINS`] are in use. Bin indices are masked to
+/// `MAX_BINS - 1` (a no-op, as they are below `bins`), so indexing needs no bounds checks.
+struct BinTable {
+    bins: usize,
+    boxes: Box<[[Bounds; MAX_BINS]; 3]>,
+    counts: Box<[[u32; MAX_BINS]; 3]>,
+    /// A second set of bins for every other triangle (see [`BinTable::add`]).
+    odd_boxes: Box<[[Bounds; MAX_BINS]; 3]>,
+    odd_counts: Box<[[u32; MAX_BINS]; 3]>,
+    /// Sweep workspace: area of the bins right of each plane.
+    right_area: Box<[f32; MAX_BINS]>,
+}
+
+impl BinTable {
+    fn new(bins: usize) -> Self {
+        let mut t = BinTable {
+            bins,
+            boxes: Box::new([[Bounds::EMPTY; MAX_BINS]; 3]),
+            counts: Box::new([[0; MAX_BINS]; 3]),
+            odd_boxes: Box::new([[Bounds::EMPTY; MAX_BINS]; 3]),
+            odd_counts: Box::new([[0; MAX_BINS]; 3]),
+            right_area: Box::new([0.0; MAX_BINS]),
+        };
+        t.reset(bins);
+        t
+    }
+
+    /// Empties the first `bins` bins of each axis and uses only those.
+    fn reset(&mut self, bins: usize) {
+        self.bins = bins;
+        for axis in 0..3 {
+            self.boxes[axis][..bins].fill(Bounds::EMPTY);
+            self.counts[axis][..bins].fill(0);
+            self.odd_boxes[axis][..bins].fill(Bounds::EMPTY);
+            self.odd_counts[axis][..bins].fill(0);
+        }
+    }
+
+    /// Bins every triangle on all three axes. Neighbouring triangles of a mesh tend to fall
+    /// in the same bins, which would chain every update to the one before through memory;
+    /// even and odd triangles go to separate bin sets, merged at the end, so that two
+    /// updates are always in flight.
+    #[inline]
+    fn add(&mut self, prims: &[Bounds], bin_of: &impl Fn(&Bounds) -> [u8; 3]) {
+        #[inline(always)]
+        fn put(
+            boxes: &mut [[Bounds; MAX_BINS]; 3],
+            counts: &mut [[u32; MAX_BINS]; 3],
+            p: &Bounds,
+            k: [u8; 3],
+        ) {
+            for axis in 0..3 {
+                let k = k[axis] as usize & (MAX_BINS - 1);
+                boxes[axis][k] = boxes[axis][k].union(*p);
+                counts[axis][k] += 1;
+            }
+        }
+        let mut pairs = prims.chunks_exact(2);
+        for pair in &mut pairs {
+            let (k0, k1) = (bin_of(&pair[0]), bin_of(&pair[1]));
+            put(&mut self.boxes, &mut self.counts, &pair[0], k0);
+            put(&mut self.odd_boxes, &mut self.odd_counts, &pair[1], k1);
+        }
+        for p in pairs.remainder() {
+            put(&mut self.boxes, &mut self.counts, p, bin_of(p));
+        }
+        for axis in 0..3 {
+            for k in 0..self.bins {
+                self.boxes[axis][k] = self.boxes[axis][k].union(self.odd_boxes[axis][k]);
+                self.counts[axis][k] += self.odd_counts[axis][k];
+            }
+        }
+    }
+
+    fn merged(mut self, other: BinTable) -> BinTable {
+        for axis in 0..3 {
+            for k in 0..self.bins {
+                self.boxes[axis][k] = self.boxes[axis][k].union(other.boxes[axis][k]);
+                self.counts[axis][k] += other.counts[axis][k];
+            }
+        }
+        self
+    }
+
+    fn axis(&self, axis: usize) -> (&[Bounds], &[u32]) {
+        (
+            &self.boxes[axis][..self.bins],
+            &self.counts[axis][..self.bins],
+        )
+    }
+
+    fn axis_mut(&mut self, axis: usize) -> (&[Bounds], &[u32], &mut [f32]) {
+        (
+            &self.boxes[axis][..self.bins],
+            &self.counts[axis][..self.bins],
+            &mut self.right_area[..self.bins],
+        )
+    }
+}
+
+/// The exact SAH split: for each axis, sort by centroid and price every position.
+fn sweep_split(
+    prims: &mut Prims,
+    bounds: Bounds,
+    may_be_leaf: bool,
+    scratch: &mut Scratch,
+) -> Split {
+    let n = prims.len();
+    let mut order = std::mem::take(&mut scratch.order);
+    let mut keys = std::mem::take(&mut scratch.keys);
+    let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, left count)
+    let right_area = &mut scratch.right_area;
+    right_area.clear();
+    right_area.resize(n, 0.0);
+    // Sorts by (centroid, index) packed in one integer: the f32 bits made monotonic above,
+    // the index below, so that ties break the same way every time.
+    let sort_by_axis =
+        |order: &mut Vec<u32>, keys: &mut Vec<u64>, axis: usize, boxes: &[Bounds]| {
+            keys.clear();
+            keys.extend(boxes.iter().enumerate().map(|(i, b)| {
+                let bits = b.centroid()[axis].to_bits();
+                let ordered = if bits >> 31 == 1 {
+                    !bits
+                } else {
+                    bits | 1 << 31
+                };
+                (ordered as u64) << 32 | i as u64
+            }));
+            keys.sort_unstable();
+            order.clear();
+            order.extend(keys.iter().map(|&k| k as u32));
+        };
+    for axis in 0..3 {
+        sort_by_axis(&mut order, &mut keys, axis, prims.boxes);
+        let mut acc = Bounds::EMPTY;
+        for k in (1..n).rev() {
+            acc = acc.union(prims.boxes[order[k] as usize]);
+            right_area[k] = acc.half_area();
+        }
+        let mut left = Bounds::EMPTY;
+        for k in 1..n {
+            left = left.union(prims.boxes[order[k - 1] as usize]);
+            let cost = left.half_area() * k as f32 + right_area[k] * (n - k) as f32;
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, axis, k));
+            }
+        }
+    }
+    let (cost, axis, mid) = best.expect("n >= 2 gives a split position");
+    let leaf = may_be_leaf && leaf_is_cheaper(n, bounds.half_area(), cost);
+    if !leaf {
+        if axis != 2 {
+            sort_by_axis(&mut order, &mut keys, axis, prims.boxes);
+        }
+        apply_order(prims, &order, scratch);
+    }
+    scratch.order = order;
+    scratch.keys = keys;
+    if leaf {
+        return Split::Leaf;
+    }
+    let (l, r) = (
+        side_bounds(&prims.boxes[..mid]),
+        side_bounds(&prims.boxes[mid..]),
+    );
+    Split::At {
+        mid,
+        left: l,
+        right: r,
+    }
+}
+
+/// Nodes this small take the exact sweep on the stack, without allocation or indirection.
+const SMALL: usize = 4;
+
+/// [`sweep_split`] for at most [`SMALL`] triangles: insertion sorts of a few centroids on the
+/// stack. Same splits, same tie-breaking (by position), a fraction of the work.
+fn small_sweep_split(prims: &mut Prims, bounds: Bounds, may_be_leaf: bool) -> Split {
+    let n = prims.len();
+    debug_assert!((2..=SMALL).contains(&n));
+    if n == 2 {
+        // One way to split two triangles, whatever the axis: no sorting needed.
+        let (a, b) = (prims.boxes[0], prims.boxes[1]);
+        if may_be_leaf && leaf_is_cheaper(2, bounds.half_area(), a.half_area() + b.half_area()) {
+            return Split::Leaf;
+        }
+        let one = |p: Bounds| {
+            (
+                p,
+                Bounds {
+                    min: p.centroid(),
+                    max: p.centroid(),
+                },
+            )
+        };
+        return Split::At {
+            mid: 1,
+            left: one(a),
+            right: one(b),
+        };
+    }
+    let mut keys = [[0.0f32; SMALL]; 3];
+    for (i, b) in prims.boxes.iter().enumerate() {
+        let c = b.centroid();
+        keys[0][i] = c.x;
+        keys[1][i] = c.y;
+        keys[2][i] = c.z;
+    }
+    let mut best: Option<(f32, usize)> = None;
+    let mut best_order = [0u8; SMALL];
+    for key in &keys {
+        let mut order = [0u8; SMALL];
+        for i in 0..n {
+            // Stable insertion: equal keys keep their positions, as the index tie-break does.
+            let mut j = i;
+            while j > 0 && key[order[j - 1] as usize] > key[i] {
+                order[j] = order[j - 1];
+                j -= 1;
+            }
+            order[j] = i as u8;
+        }
+        let mut right_area = [0.0f32; SMALL];
+        let mut acc = Bounds::EMPTY;
+        for k in (1..n).rev() {
+            acc = acc.union(prims.boxes[order[k] as usize]);
+            right_area[k] = acc.half_area();
+        }
+        let mut left = Bounds::EMPTY;
+        for k in 1..n {
+            left = left.union(prims.boxes[order[k - 1] as usize]);
+            let cost = left.half_area() * k as f32 + right_area[k] * (n - k) as f32;
+            if best.is_none_or(|(c, _)| cost < c) {
+                best = Some((cost, k));
+                best_order = order;
+            }
+        }
+    }
+    let (cost, mid) = best.expect("n >= 2 gives a split position");
+    if may_be_leaf && leaf_is_cheaper(n, bounds.half_area(), cost) {
+        return Split::Leaf;
+    }
+    // Permute in place, cycle by cycle: position i takes what was at best_order[i].
+    let mut done = 0u32;
+    for start in 0..n {
+        if done & (1 << start) != 0 {
+            continue;
+        }
+        let (first_box, first_id) = (prims.boxes[start], prims.ids[start]);
+        let mut i = start;
+        loop {
+            done |= 1 << i;
+            let from = best_order[i] as usize;
+            if from == start {
+                prims.boxes[i] = first_box;
+                prims.ids[i] = first_id;
+                break;
+            }
+            prims.boxes[i] = prims.boxes[from];
+            prims.ids[i] = prims.ids[from];
+            i = from;
+        }
+    }
+    Split::At {
+        mid,
+        left: side_bounds(&prims.boxes[..mid]),
+        right: side_bounds(&prims.boxes[mid..]),
+    }
+}
+
+/// Splits at the middle by count, ordered along the centroids' widest axis: the fallback
+/// when centroids coincide, and the way to keep depth bounded.
+fn median_split(
+    prims: &mut Prims,
+    centroids: Bounds,
+    scratch: &mut Scratch,
+) -> (usize, Side, Side) {
+    let n = prims.len();
+    let mid = n / 2;
+    let extent = centroids.max - centroids.min;
+    if extent.max_element() > 0.0 {
+        let axis = if extent.x >= extent.y && extent.x >= extent.z {
+            0
+        } else if extent.y >= extent.z {
+            1
+        } else {
+            2
+        };
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        order.select_nth_unstable_by(mid, |&a, &b| {
+            let (ca, cb) = (
+                prims.boxes[a as usize].centroid()[axis],
+                prims.boxes[b as usize].centroid()[axis],
+            );
+            ca.total_cmp(&cb)
+        });
+        apply_order(prims, &order, scratch);
+    }
+    (
+        mid,
+        side_bounds(&prims.boxes[..mid]),
+        side_bounds(&prims.boxes[mid..]),
+    )
+}
+
+fn side_bounds(boxes: &[Bounds]) -> Side {
+    boxes
+        .iter()
+        .fold((Bounds::EMPTY, Bounds::EMPTY), |(b, mut c), p| {
+            c.grow(p.centroid());
+            (b.union(*p), c)
+        })
+}
+
+/// Permutes the triangles so that position `i` holds what was at `order[i]`.
+fn apply_order(prims: &mut Prims, order: &[u32], scratch: &mut Scratch) {
+    scratch.boxes.clear();
+    scratch
+        .boxes
+        .extend(order.iter().map(|&i| prims.boxes[i as usize]));
+    scratch.ids.clear();
+    scratch
+        .ids
+        .extend(order.iter().map(|&i| prims.ids[i as usize]));
+    prims.boxes.copy_from_slice(&scratch.boxes);
+    prims.ids.copy_from_slice(&scratch.ids);
+}

@@ -1,0 +1,111 @@
+//! The bounding volume hierarchy: top-down SAH builders (binned, and an exact full sweep
+//! as the quality reference), tree statistics, and the host's traversal of it.
+//!
+//! The builders produce the thesis's layout directly: 32-byte [`BvhNode`]s in depth-first
+//! order (a node's left child is the next node), leaves holding ranges of
+//! [`Bvh::prim_order`]. The device layouts in [`crate::layout`] start from this tree.
+
+mod build;
+mod stats;
+mod traverse;
+
+pub use stats::BvhStats;
+pub use traverse::{ROBUST_EXIT, RayBox};
+
+use serde::Deserialize;
+
+use crate::layout::BvhNode;
+use crate::mesh::Mesh;
+
+/// No tree is deeper than this (nodes on the longest root-to-leaf path). Builders switch
+/// to median splits where the SAH would go deeper, so traversal stacks stay bounded.
+pub const MAX_DEPTH: u32 = 64;
+
+/// SAH cost of visiting a node (testing its children's boxes), relative to one
+/// ray/triangle test. Both are 1: the box pair and the watertight triangle test cost
+/// about the same on the devices measured.
+pub const TRAVERSAL_COST: f32 = 1.0;
+/// SAH cost of one ray/triangle test.
+pub const INTERSECTION_COST: f32 = 1.0;
+
+/// Which builder makes the tree.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Builder {
+    /// Binned SAH over centroids on all three axes (Wald 2007), parallel: fast.
+    #[default]
+    Binned,
+    /// Exact SAH over every centroid-sorted split on all three axes: slow, the reference.
+    Sweep,
+}
+
+/// How to build.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BuildOptions {
+    pub builder: Builder,
+    /// Bins per axis for the binned builder (2 to 64).
+    pub bins: u32,
+    /// Largest leaf (1 to 255). Bigger nodes are always split; smaller ones become
+    /// leaves where that costs less under the SAH.
+    pub max_leaf_size: u32,
+    /// Deepest tree allowed (2 to [`MAX_DEPTH`]). Where the SAH would go deeper the builder
+    /// switches to median splits in time; a node at this depth is a leaf, whatever its size.
+    pub max_depth: u32,
+}
+
+impl Default for BuildOptions {
+    fn default() -> Self {
+        BuildOptions {
+            builder: Builder::Binned,
+            bins: 32,
+            max_leaf_size: 8,
+            max_depth: MAX_DEPTH,
+        }
+    }
+}
+
+impl BuildOptions {
+    pub fn check(&self) -> crate::Result<()> {
+        if !(2..=build::MAX_BINS as u32).contains(&self.bins) {
+            return Err(crate::Error::Invalid(format!(
+                "--bins {} is out of range: use 2 to {}",
+                self.bins,
+                build::MAX_BINS
+            )));
+        }
+        if !(1..=255).contains(&self.max_leaf_size) {
+            return Err(crate::Error::Invalid(format!(
+                "--max-leaf-size {} is out of range: use 1 to 255",
+                self.max_leaf_size
+            )));
+        }
+        if !(2..=MAX_DEPTH).contains(&self.max_depth) {
+            return Err(crate::Error::Invalid(format!(
+                "maximum depth {} is out of range: use 2 to {MAX_DEPTH}",
+                self.max_depth
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// A built BVH: nodes in depth-first order (root first) and the leaf order of triangles.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Bvh {
+    pub nodes: Vec<BvhNode>,
+    /// `prim_order[i]` is the mesh triangle at position `i` of the leaves' ranges.
+    pub prim_order: Vec<u32>,
+    /// Nodes on the longest root-to-leaf path (a lone leaf has depth 1).
+    pub depth: u32,
+}
+
+impl Bvh {
+    /// Builds a BVH over the mesh's triangles with rayon's threads.
+    pub fn build(mesh: &Mesh, options: &BuildOptions) -> Bvh {
+        build::build(mesh, options)
+    }
+
+    pub fn stats(&self) -> BvhStats {
+        BvhStats::of(self)
+    }
+}

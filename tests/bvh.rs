@@ -1,0 +1,291 @@
+//! The BVH against brute force: structural invariants and closest hits on random meshes
+//! (proptest), SAH quality of the binned builder against the exact sweep, and the
+//! degenerate inputs every builder must survive.
+
+mod common;
+
+use cltrace::bvh::{BuildOptions, Builder, Bvh, MAX_DEPTH};
+use cltrace::geometry::Ray;
+use cltrace::input::generate::Generator;
+use cltrace::input::load_mesh;
+use cltrace::layout::{FlatBvh, triangles_in_order};
+use cltrace::mesh::Mesh;
+use cltrace::render::cpu::{BruteForce, ClosestHit};
+use common::*;
+use glam::Vec3;
+use proptest::prelude::*;
+
+fn options(builder: Builder, bins: u32, max_leaf_size: u32) -> BuildOptions {
+    BuildOptions {
+        builder,
+        bins,
+        max_leaf_size,
+        ..Default::default()
+    }
+}
+
+fn all_options() -> Vec<BuildOptions> {
+    vec![
+        BuildOptions::default(),
+        options(Builder::Binned, 2, 1),
+        options(Builder::Binned, 16, 4),
+        options(Builder::Binned, 64, 255),
+        options(Builder::Sweep, 32, 8),
+        options(Builder::Sweep, 32, 1),
+    ]
+}
+
+/// Closest hits through the BVH equal brute force's: the same triangle, or an exact tie.
+fn same_hits(mesh: &Mesh, bvh: &FlatBvh, rays: &[Ray]) -> Result<(), String> {
+    let brute = BruteForce {
+        triangles: triangles_in_order(mesh, 0..mesh.triangle_count() as u32),
+    };
+    for (i, ray) in rays.iter().enumerate() {
+        let a = brute.closest_hit(ray, f32::INFINITY);
+        let b = bvh.closest_hit(ray, f32::INFINITY);
+        match (a, b) {
+            (None, None) => {}
+            (Some((ia, ta)), Some((ib, tb))) => {
+                let prim_b = bvh.triangles[ib].prim as usize;
+                let tie = ta == tb && hit_distance(ray, &brute.triangles[prim_b]).is_some();
+                if ia != prim_b && !tie {
+                    return Err(format!(
+                        "ray {i}: brute force hits {ia} at {ta}, the BVH {prim_b} at {tb}"
+                    ));
+                }
+                if ta != tb {
+                    return Err(format!(
+                        "ray {i}: triangle {ia} at {ta} by brute force, {tb} through the BVH"
+                    ));
+                }
+            }
+            (a, b) => return Err(format!("ray {i}: brute force {a:?}, BVH {b:?}")),
+        }
+    }
+    Ok(())
+}
+
+/// Rays from points around the mesh's box towards points inside it, and some at random.
+fn rays_for(mesh: &Mesh, seed: u64, count: usize) -> Vec<Ray> {
+    let b = mesh.bounds();
+    let (c, r) = (b.center(), b.extent().length().max(1e-3));
+    let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    let mut unit = move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+    };
+    (0..count)
+        .map(|_| {
+            let from = c + Vec3::new(unit(), unit(), unit()) * r * 1.5;
+            let to = c + Vec3::new(unit(), unit(), unit()) * b.extent() * 0.5;
+            let dir = to - from;
+            Ray::new(from, if dir.length() > 0.0 { dir } else { Vec3::Z })
+        })
+        .collect()
+}
+
+fn mesh_strategy() -> impl Strategy<Value = Mesh> {
+    // Coordinates from a small set of values now and then, so that shared vertices,
+    // coincident centroids, flat boxes and zero-area triangles all occur.
+    let coord = prop_oneof![
+        4 => -10.0f32..10.0,
+        1 => prop::sample::select(vec![0.0f32, 1.0, -1.0, 2.5]),
+    ];
+    let corner = [coord.clone(), coord.clone(), coord].prop_map(Vec3::from);
+    prop::collection::vec([corner.clone(), corner.clone(), corner], 1..120).prop_map(|tris| {
+        let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
+        let triangles = (0..tris.len() as u32)
+            .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+            .collect();
+        Mesh::new(positions, triangles)
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    #[test]
+    fn random_meshes_build_valid_trees_with_brute_force_hits(mesh in mesh_strategy(), seed in any::<u64>()) {
+        let rays = rays_for(&mesh, seed, 64);
+        for opts in all_options() {
+            let bvh = Bvh::build(&mesh, &opts);
+            prop_assert!(bvh.check(&mesh).is_ok(), "{opts:?}: {}", bvh.check(&mesh).unwrap_err());
+            let flat = FlatBvh::new(bvh, &mesh);
+            if let Err(e) = same_hits(&mesh, &flat, &rays) {
+                prop_assert!(false, "{opts:?}: {e}");
+            }
+        }
+    }
+}
+
+fn test_scenes() -> Vec<(String, Mesh)> {
+    let mut scenes: Vec<(String, Mesh)> = [
+        Generator::Soup {
+            triangles: 5000,
+            seed: 11,
+        },
+        Generator::Sphere { subdivisions: 4 },
+        Generator::Landscape {
+            resolution: 64,
+            seed: 5,
+        },
+        Generator::NestedBoxes { count: 20 },
+        Generator::Sphereflake {
+            levels: 2,
+            subdivisions: 1,
+            ground: 32,
+        },
+    ]
+    .into_iter()
+    .map(|g| (g.name(), generate(g)))
+    .collect();
+    for name in ["stanford_bunny.obj", "utah_teapot.obj"] {
+        if let Some(path) = shared_scene(name) {
+            scenes.push((name.to_string(), load_mesh(&path).unwrap()));
+        }
+    }
+    scenes
+}
+
+#[test]
+fn binned_sah_cost_is_within_5_percent_of_the_sweep() {
+    for (name, mesh) in test_scenes() {
+        let binned = Bvh::build(&mesh, &BuildOptions::default());
+        let sweep = Bvh::build(&mesh, &options(Builder::Sweep, 32, 8));
+        binned.check(&mesh).unwrap();
+        sweep.check(&mesh).unwrap();
+        let (b, s) = (binned.stats().sah_cost, sweep.stats().sah_cost);
+        eprintln!(
+            "{name}: binned SAH {b:.3}, sweep {s:.3} ({:+.2}%)",
+            (b / s - 1.0) * 100.0
+        );
+        assert!(
+            b <= s * 1.05,
+            "{name}: binned SAH cost {b} is more than 5% above the sweep's {s}"
+        );
+    }
+}
+
+#[test]
+fn bvh_hits_equal_brute_force_on_the_test_scenes() {
+    for (name, mesh) in test_scenes() {
+        let flat = FlatBvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
+        let count = if mesh.triangle_count() > 20_000 {
+            200
+        } else {
+            1000
+        };
+        same_hits(&mesh, &flat, &rays_for(&mesh, 99, count))
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
+}
+
+/// Builds with every option set, checks the tree and its hits, returns the default tree.
+fn survives(name: &str, mesh: &Mesh) -> Bvh {
+    let rays = rays_for(mesh, 5, 32);
+    for opts in all_options() {
+        let bvh = Bvh::build(mesh, &opts);
+        bvh.check(mesh)
+            .unwrap_or_else(|e| panic!("{name}, {opts:?}: {e}"));
+        same_hits(mesh, &FlatBvh::new(bvh, mesh), &rays)
+            .unwrap_or_else(|e| panic!("{name}, {opts:?}: {e}"));
+    }
+    Bvh::build(mesh, &BuildOptions::default())
+}
+
+fn copies(tri: [Vec3; 3], n: usize) -> Mesh {
+    Mesh::new(tri.to_vec(), vec![[0, 1, 2]; n])
+}
+
+#[test]
+fn a_single_triangle() {
+    let bvh = survives("one triangle", &copies([Vec3::ZERO, Vec3::X, Vec3::Y], 1));
+    assert_eq!((bvh.nodes.len(), bvh.depth), (1, 1));
+}
+
+#[test]
+fn all_centroids_equal() {
+    let bvh = survives(
+        "1000 copies of one triangle",
+        &copies([Vec3::ZERO, Vec3::X, Vec3::Y], 1000),
+    );
+    assert!(bvh.depth <= MAX_DEPTH);
+}
+
+#[test]
+fn flat_and_collinear_meshes() {
+    // Every triangle in the plane z = 0: boxes without thickness.
+    let flat = generate(Generator::Landscape {
+        resolution: 20,
+        seed: 0,
+    });
+    let flat = Mesh::new(
+        flat.positions
+            .iter()
+            .map(|p| Vec3::new(p.x, p.z, 0.0))
+            .collect(),
+        flat.triangles,
+    );
+    survives("flat", &flat);
+    // Zero-area triangles along one line: boxes without area.
+    let line: Vec<Vec3> = (0..300)
+        .map(|i| Vec3::new(i as f32 * 0.1, 0.0, 0.0))
+        .collect();
+    let tris = (0..100u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+    survives("collinear", &Mesh::new(line, tris));
+}
+
+#[test]
+fn a_million_triangles_in_one_point() {
+    let mesh = copies([Vec3::ONE; 3], 1_000_000);
+    let bvh = Bvh::build(&mesh, &BuildOptions::default());
+    bvh.check(&mesh).unwrap();
+    assert!(bvh.depth <= MAX_DEPTH);
+    let flat = FlatBvh::new(bvh, &mesh);
+    let ray = Ray::new(Vec3::new(1.0, 1.0, 5.0), Vec3::NEG_Z);
+    assert_eq!(
+        flat.closest_hit(&ray, f32::INFINITY),
+        None,
+        "zero-area triangles never hit"
+    );
+}
+
+#[test]
+fn depth_stays_bounded_where_the_sah_would_chain() {
+    // Triangles sharing a corner, each 1.45 times larger than the last: the SAH peels off
+    // the largest again and again, a tree far deeper than it is wide: depth 20 or more where
+    // a balanced tree needs 7. Under tighter limits the builder must switch to median splits
+    // in time, and at the limit itself make leaves whatever their size.
+    let mut mesh = Mesh::default();
+    for i in 0..74 {
+        let s = 1.45f32.powi(i);
+        let base = mesh.positions.len() as u32;
+        mesh.positions
+            .extend([Vec3::ZERO, Vec3::new(s, 0.0, 0.0), Vec3::new(0.0, s, 0.0)]);
+        mesh.triangles.push([base, base + 1, base + 2]);
+    }
+    let rays: Vec<Ray> = (0..74)
+        .map(|i| {
+            Ray::new(
+                Vec3::new(0.3, 0.3, 0.0) * 1.45f32.powi(i) + Vec3::Z,
+                Vec3::NEG_Z,
+            )
+        })
+        .collect();
+    for opts in all_options() {
+        let natural = Bvh::build(&mesh, &opts).depth;
+        assert!(
+            natural >= 20,
+            "{opts:?}: natural depth {natural} does not test the limit"
+        );
+        for max_depth in [16, 8, 2] {
+            let limited = BuildOptions { max_depth, ..opts };
+            let bvh = Bvh::build(&mesh, &limited);
+            assert!(bvh.depth <= max_depth, "{limited:?}: depth {}", bvh.depth);
+            bvh.check(&mesh).unwrap();
+            same_hits(&mesh, &FlatBvh::new(bvh, &mesh), &rays).unwrap();
+        }
+    }
+}

@@ -1,0 +1,631 @@
+//! End-to-end runs of the `cltrace` binary: renders, hit records, scene files, and every
+//! failure exiting with its documented code, one `error:` line and no output file.
+
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const BIN: &str = env!("CARGO_BIN_EXE_cltrace");
+
+const WIDTH: u32 = 64;
+const HEIGHT: u32 = 48;
+
+/// A 2x2 square in the z = 0 plane, facing +z (where the auto camera puts the eye), as a
+/// quad: triangles 0 and 1.
+const QUAD: &str = "\
+# a square facing the camera
+v -1 -1 0
+v 1 -1 0
+v 1 1 0
+v -1 1 0
+f 1 2 3 4
+";
+
+/// Distance from the auto eye to the square: half the box diagonal over sin(fov / 2).
+fn auto_distance() -> f32 {
+    (2f32.sqrt()) / (22.5f32.to_radians()).sin()
+}
+
+/// A work folder: `in/` holds the inputs, `out/` receives the outputs and must hold
+/// nothing else after a run.
+struct Work {
+    _dir: tempfile::TempDir,
+    input: PathBuf,
+    out: PathBuf,
+}
+
+impl Work {
+    fn new() -> Self {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("in");
+        let out = dir.path().join("out");
+        std::fs::create_dir(&input).unwrap();
+        std::fs::create_dir(&out).unwrap();
+        Work {
+            _dir: dir,
+            input,
+            out,
+        }
+    }
+
+    fn write(&self, name: &str, text: &str) -> PathBuf {
+        let path = self.input.join(name);
+        std::fs::write(&path, text).unwrap();
+        path
+    }
+
+    fn quad(&self) -> PathBuf {
+        self.write("quad.obj", QUAD)
+    }
+
+    fn out(&self, name: &str) -> PathBuf {
+        self.out.join(name)
+    }
+
+    /// Names in `out/`.
+    fn out_entries(&self) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(&self.out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+}
+
+/// `cltrace` with `args`, run in `cwd`, with no device chosen by the environment and no
+/// backtraces asked for (so that a panic would show its "RUST_BACKTRACE" note).
+fn cltrace<S: AsRef<OsStr>>(cwd: &Path, args: &[S]) -> Command {
+    let mut cmd = Command::new(BIN);
+    cmd.args(args)
+        .current_dir(cwd)
+        .env_remove("CLTRACE_DEVICE")
+        .env_remove("RUST_BACKTRACE")
+        .env_remove("RUST_LIB_BACKTRACE");
+    cmd
+}
+
+fn run(mut cmd: Command) -> Output {
+    cmd.output().expect("the cltrace binary runs")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+#[track_caller]
+fn succeeded(out: &Output) {
+    assert!(
+        out.status.success(),
+        "cltrace failed with {:?}\nstdout: {}\nstderr: {}",
+        out.status.code(),
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+}
+
+/// Render arguments for `mesh` into `output`, without a size.
+fn unsized_args(mesh: &Path, output: &Path, method: &str) -> Vec<String> {
+    vec![
+        "render".into(),
+        mesh.display().to_string(),
+        "-o".into(),
+        output.display().to_string(),
+        "--method".into(),
+        method.into(),
+    ]
+}
+
+/// Render arguments for `mesh` into `output` at the test size.
+fn render_args(mesh: &Path, output: &Path, method: &str) -> Vec<String> {
+    let size = [
+        "--width",
+        &WIDTH.to_string(),
+        "--height",
+        &HEIGHT.to_string(),
+    ]
+    .map(String::from);
+    let mut args = unsized_args(mesh, output, method);
+    args.extend(size);
+    args
+}
+
+// ---------------------------------------------------------------------------------------
+// Renders
+// ---------------------------------------------------------------------------------------
+
+/// Checks the image's size and that the square stands out from the background.
+#[track_caller]
+fn check_image(path: &Path, width: u32, height: u32) {
+    let img = image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgb8();
+    assert_eq!(img.dimensions(), (width, height), "{}", path.display());
+    let centre = img.get_pixel(width / 2, height / 2);
+    let corner = img.get_pixel(0, 0);
+    let diff: i32 = centre
+        .0
+        .iter()
+        .zip(corner.0)
+        .map(|(&a, b)| (a as i32 - b as i32).abs())
+        .sum();
+    assert!(
+        diff > 30,
+        "{}: the hit centre {centre:?} looks like the missed corner {corner:?}",
+        path.display()
+    );
+}
+
+#[test]
+fn render_png_on_the_cpu() {
+    let w = Work::new();
+    let png = w.out("out.png");
+    let out = run(cltrace(
+        &w.input,
+        &render_args(&w.quad(), &png, "cpu-brute"),
+    ));
+    succeeded(&out);
+    check_image(&png, WIDTH, HEIGHT);
+    assert_eq!(w.out_entries(), ["out.png"]);
+}
+
+#[test]
+fn render_other_formats() {
+    let w = Work::new();
+    let quad = w.quad();
+    for name in ["out.bmp", "out.ppm", "out.jpg", "out.jpeg", "OUT.PNG"] {
+        let path = w.out(name);
+        let out = run(cltrace(&w.input, &render_args(&quad, &path, "cpu-brute")));
+        succeeded(&out);
+        check_image(&path, WIDTH, HEIGHT);
+    }
+    // the format follows the extension, not just the name
+    let bmp = std::fs::read(w.out("out.bmp")).unwrap();
+    assert_eq!(&bmp[..2], b"BM");
+    let ppm = std::fs::read(w.out("out.ppm")).unwrap();
+    assert_eq!(ppm[0], b'P');
+    let jpg = std::fs::read(w.out("out.jpg")).unwrap();
+    assert_eq!(&jpg[..2], &[0xFF, 0xD8]);
+    let png = std::fs::read(w.out("OUT.PNG")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    assert_eq!(w.out_entries().len(), 5, "{:?}", w.out_entries());
+}
+
+/// The hit records: (triangle, distance) per pixel, row-major.
+fn read_hits(path: &Path) -> Vec<(u32, f32)> {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(
+        bytes.len(),
+        (WIDTH * HEIGHT * 8) as usize,
+        "{} has the wrong size",
+        path.display()
+    );
+    bytes
+        .chunks_exact(8)
+        .map(|c| {
+            (
+                u32::from_le_bytes(c[0..4].try_into().unwrap()),
+                f32::from_le_bytes(c[4..8].try_into().unwrap()),
+            )
+        })
+        .collect()
+}
+
+#[track_caller]
+fn check_hits(hits: &[(u32, f32)]) {
+    let at = |x: u32, y: u32| hits[(y * WIDTH + x) as usize];
+    // the centre pixel sees the square, straight ahead
+    let (prim, t) = at(WIDTH / 2, HEIGHT / 2);
+    assert!(prim < 2, "centre: triangle {prim:#x}");
+    assert!(t.is_finite() && t > 0.0, "centre: distance {t}");
+    assert!(
+        (t - auto_distance()).abs() < 1e-3 * auto_distance(),
+        "centre: distance {t}, expected {}",
+        auto_distance()
+    );
+    // the corners see nothing
+    for (x, y) in [
+        (0, 0),
+        (WIDTH - 1, 0),
+        (0, HEIGHT - 1),
+        (WIDTH - 1, HEIGHT - 1),
+    ] {
+        let (prim, t) = at(x, y);
+        assert_eq!(prim, 0xFFFF_FFFF, "corner ({x}, {y})");
+        assert_eq!(t, f32::INFINITY, "corner ({x}, {y})");
+    }
+    // every record is a hit on one of the two triangles at a positive distance, or a miss
+    for (i, &(prim, t)) in hits.iter().enumerate() {
+        match prim {
+            0 | 1 => assert!(t.is_finite() && t > 0.0, "pixel {i}: {prim} at {t}"),
+            0xFFFF_FFFF => assert_eq!(t, f32::INFINITY, "pixel {i}"),
+            _ => panic!("pixel {i}: triangle {prim} does not exist"),
+        }
+    }
+    // both triangles of the square show, and the square does not fill the image
+    assert!(hits.iter().any(|h| h.0 == 0) && hits.iter().any(|h| h.0 == 1));
+    let hit = hits.iter().filter(|h| h.0 != 0xFFFF_FFFF).count();
+    assert!(
+        hit > hits.len() / 8 && hit < hits.len() * 7 / 8,
+        "{hit} hits"
+    );
+}
+
+#[test]
+fn hit_records_on_the_cpu() {
+    let w = Work::new();
+    let hits = w.out("hits.bin");
+    let mut args = render_args(&w.quad(), &w.out("out.png"), "cpu-brute");
+    args.extend(["--hits".into(), hits.display().to_string()]);
+    succeeded(&run(cltrace(&w.input, &args)));
+    check_hits(&read_hits(&hits));
+    assert_eq!(w.out_entries(), ["hits.bin", "out.png"]);
+}
+
+#[test]
+fn render_with_opencl_matches_the_cpu() {
+    let w = Work::new();
+    let quad = w.quad();
+    let mut records = Vec::new();
+    for method in ["cpu-brute", "cl-brute"] {
+        let png = w.out(&format!("{method}.png"));
+        let hits = w.out(&format!("{method}.bin"));
+        let mut args = render_args(&quad, &png, method);
+        args.extend(["--hits".into(), hits.display().to_string()]);
+        let mut cmd = cltrace(&w.input, &args);
+        cmd.env("CLTRACE_DEVICE", "cpu");
+        let out = run(cmd);
+        succeeded(&out);
+        check_image(&png, WIDTH, HEIGHT);
+        let h = read_hits(&hits);
+        check_hits(&h);
+        records.push(h);
+    }
+    // the same triangles everywhere, at the same distances
+    for (i, (cpu, cl)) in records[0].iter().zip(&records[1]).enumerate() {
+        assert_eq!(cpu.0, cl.0, "pixel {i}: cpu {cpu:?}, opencl {cl:?}");
+        assert!(
+            cpu.1 == cl.1 || (cpu.1 - cl.1).abs() <= 1e-5 * cpu.1,
+            "pixel {i}: cpu {cpu:?}, opencl {cl:?}"
+        );
+    }
+}
+
+#[test]
+fn scene_file_with_a_relative_mesh_and_overriding_flags() {
+    let w = Work::new();
+    let scenes = w.input.join("scenes");
+    std::fs::create_dir(&scenes).unwrap();
+    std::fs::write(scenes.join("m.obj"), QUAD).unwrap();
+    let scene = scenes.join("s.toml");
+    std::fs::write(
+        &scene,
+        "mesh = \"m.obj\"\n\n[camera]\nwidth = 40\nheight = 30\nfov = 45.0\n\n\
+         [render]\nmethod = \"cpu-brute\"\nshade = \"normal\"\n",
+    )
+    .unwrap();
+    // run from elsewhere: the mesh path is relative to the scene file, not the cwd
+    let png = w.out("scene.png");
+    let out = run(cltrace(
+        &w.out,
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+        ],
+    ));
+    succeeded(&out);
+    check_image(&png, 40, 30);
+
+    // flags override the file
+    let png2 = w.out("wide.png");
+    let out = run(cltrace(
+        &w.out,
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            png2.to_str().unwrap(),
+            "--width",
+            "64",
+        ],
+    ));
+    succeeded(&out);
+    check_image(&png2, 64, 30);
+
+    // a relative scene path and a relative output, from the scene's folder's parent
+    let out = run(cltrace(
+        &w.input,
+        &["render", "scenes/s.toml", "-o", "rel.png", "--height", "20"],
+    ));
+    succeeded(&out);
+    check_image(&w.input.join("rel.png"), 40, 20);
+}
+
+// ---------------------------------------------------------------------------------------
+// Failures
+// ---------------------------------------------------------------------------------------
+
+/// Runs a render that must fail with `code`; checks the one `error:` line and that `out/`
+/// holds nothing new. Returns the error line.
+#[track_caller]
+fn fails(w: &Work, args: &[String], env: &[(&str, &str)], code: i32) -> String {
+    let before = w.out_entries();
+    let mut cmd = cltrace(&w.input, args);
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    let out = run(cmd);
+    let stderr = text(&out.stderr);
+    assert_eq!(
+        out.status.code(),
+        Some(code),
+        "{args:?}\nstdout: {}\nstderr: {stderr}",
+        text(&out.stdout)
+    );
+    assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    assert!(!stderr.contains("RUST_BACKTRACE"), "{args:?}: {stderr}");
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "{args:?}: not one line: {stderr:?}");
+    assert!(lines[0].starts_with("error: "), "{args:?}: {stderr:?}");
+    assert!(lines[0].len() > "error: ".len() + 5, "{args:?}: {stderr:?}");
+    assert_eq!(text(&out.stdout), "", "{args:?}: stdout");
+    assert_eq!(w.out_entries(), before, "{args:?} left files behind");
+    lines[0].to_string()
+}
+
+fn with(mut args: Vec<String>, more: &[&str]) -> Vec<String> {
+    args.extend(more.iter().map(|s| s.to_string()));
+    args
+}
+
+#[test]
+fn bad_meshes_exit_2() {
+    let w = Work::new();
+    let png = w.out("out.png");
+    let nan = w.write("nan.obj", "v 0 0 0\nv nan 1 0\nv 0 1 0\nf 1 2 3\n");
+    let msg = fails(&w, &render_args(&nan, &png, "cpu-brute"), &[], 2);
+    assert!(msg.contains("nan.obj:2:"), "{msg}");
+    let missing = w.input.join("missing.obj");
+    let msg = fails(&w, &render_args(&missing, &png, "cpu-brute"), &[], 2);
+    assert!(msg.contains("missing.obj"), "{msg}");
+    // the same through OpenCL: the mesh is refused however it would be traced
+    let msg = fails(
+        &w,
+        &render_args(&missing, &png, "cl-brute"),
+        &[("CLTRACE_DEVICE", "cpu")],
+        2,
+    );
+    assert!(msg.contains("missing.obj"), "{msg}");
+    let stl = w.write("m.stl", "solid\nendsolid\n");
+    fails(&w, &render_args(&stl, &png, "cpu-brute"), &[], 2);
+    let bad_ply = w.write("bad.ply", "ply\nformat ascii 1.0\nbogus\nend_header\n");
+    let msg = fails(&w, &render_args(&bad_ply, &png, "cpu-brute"), &[], 2);
+    assert!(msg.contains("bad.ply:3:"), "{msg}");
+    // with --hits too: neither file appears
+    let args = with(
+        render_args(&nan, &png, "cpu-brute"),
+        &["--hits", w.out("h.bin").to_str().unwrap()],
+    );
+    fails(&w, &args, &[], 2);
+}
+
+#[test]
+fn bad_options_exit_2() {
+    let w = Work::new();
+    let quad = w.quad();
+    let png = w.out("out.png");
+    let base = || render_args(&quad, &png, "cpu-brute");
+
+    let msg = fails(
+        &w,
+        &render_args(&quad, &w.out("out.tiff"), "cpu-brute"),
+        &[],
+        2,
+    );
+    assert!(msg.contains("tiff"), "{msg}");
+    fails(
+        &w,
+        &render_args(&quad, &w.out("noext"), "cpu-brute"),
+        &[],
+        2,
+    );
+    let no_size = || unsized_args(&quad, &png, "cpu-brute");
+    let msg = fails(
+        &w,
+        &with(no_size(), &["--width", "0", "--height", "48"]),
+        &[],
+        2,
+    );
+    assert!(msg.contains("width") || msg.contains("resolution"), "{msg}");
+    let msg = fails(
+        &w,
+        &with(no_size(), &["--width", "64", "--height", "20000"]),
+        &[],
+        2,
+    );
+    assert!(msg.contains("20000"), "{msg}");
+    fails(
+        &w,
+        &with(no_size(), &["--width", "16385", "--height", "1"]),
+        &[],
+        2,
+    );
+    fails(&w, &with(base(), &["--fov", "180"]), &[], 2);
+    fails(&w, &with(base(), &["--fov", "0"]), &[], 2);
+    fails(&w, &with(base(), &["--fov=-10"]), &[], 2);
+    let msg = fails(
+        &w,
+        &with(base(), &["--eye", "0,0,0", "--look-at", "0,0,0"]),
+        &[],
+        2,
+    );
+    assert!(msg.contains("eye"), "{msg}");
+    let msg = fails(
+        &w,
+        &with(
+            base(),
+            &["--eye", "0,0,5", "--look-at", "0,0,0", "--up", "0,0,1"],
+        ),
+        &[],
+        2,
+    );
+    assert!(msg.contains("up"), "{msg}");
+    // up parallel to the auto view direction (-z)
+    fails(&w, &with(base(), &["--up", "0,0,-3"]), &[], 2);
+    fails(&w, &with(base(), &["--up", "0,0,0"]), &[], 2);
+}
+
+#[test]
+fn output_folder_that_does_not_exist() {
+    // Refused before any work as a bad option (exit 2), and the folder is not created.
+    let w = Work::new();
+    let quad = w.quad();
+    let missing = w.out("missing").join("x.png");
+    let msg = fails(&w, &render_args(&quad, &missing, "cpu-brute"), &[], 2);
+    assert!(msg.contains("missing"), "{msg}");
+    let args = with(
+        render_args(&quad, &w.out("out.png"), "cpu-brute"),
+        &["--hits", w.out("missing").join("h.bin").to_str().unwrap()],
+    );
+    fails(&w, &args, &[], 2);
+    assert!(!w.out("missing").exists());
+}
+
+#[test]
+fn output_that_cannot_be_written_exits_1() {
+    // The image path is a folder: the render runs, the write fails, and neither the
+    // image nor a temporary `.cltrace-*.tmp` file is left behind.
+    let w = Work::new();
+    let quad = w.quad();
+    std::fs::create_dir(w.out("taken.png")).unwrap();
+    let msg = fails(
+        &w,
+        &render_args(&quad, &w.out("taken.png"), "cpu-brute"),
+        &[],
+        1,
+    );
+    assert!(msg.contains("taken.png"), "{msg}");
+    assert_eq!(w.out_entries(), ["taken.png"]);
+    assert!(w.out("taken.png").is_dir());
+}
+
+#[test]
+fn bad_scene_files_exit_2() {
+    let w = Work::new();
+    w.quad();
+    let png = w.out("out.png");
+    let scene = w.write(
+        "s.toml",
+        "mesh = \"quad.obj\"\n[camera]\nwidth = 32\nzoom = 2\n",
+    );
+    let msg = fails(
+        &w,
+        &[
+            "render".to_string(),
+            scene.display().to_string(),
+            "-o".into(),
+            png.display().to_string(),
+        ],
+        &[],
+        2,
+    );
+    assert!(msg.contains("s.toml:4:"), "{msg}");
+    assert!(msg.contains("zoom"), "{msg}");
+    // a mesh the scene names that does not exist
+    let scene = w.write("t.toml", "mesh = \"nothere.obj\"\n");
+    let msg = fails(
+        &w,
+        &[
+            "render".to_string(),
+            scene.display().to_string(),
+            "-o".into(),
+            png.display().to_string(),
+            "--method".into(),
+            "cpu-brute".into(),
+        ],
+        &[],
+        2,
+    );
+    assert!(msg.contains("nothere.obj"), "{msg}");
+    // a scene file that is not there
+    fails(
+        &w,
+        &[
+            "render".to_string(),
+            w.input.join("gone.toml").display().to_string(),
+            "-o".into(),
+            png.display().to_string(),
+        ],
+        &[],
+        2,
+    );
+}
+
+#[test]
+fn no_such_device_exits_1() {
+    let w = Work::new();
+    let quad = w.quad();
+    let png = w.out("out.png");
+    let msg = fails(
+        &w,
+        &with(render_args(&quad, &png, "cl-brute"), &["--device", "9:9"]),
+        &[("CLTRACE_DEVICE", "cpu")],
+        1,
+    );
+    assert!(msg.contains("9:9"), "{msg}");
+    // the same from the environment
+    fails(
+        &w,
+        &render_args(&quad, &png, "cl-brute"),
+        &[("CLTRACE_DEVICE", "9:9")],
+        1,
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// Devices and help
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn devices_lists_a_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = run(cltrace(dir.path(), &["devices"]));
+    succeeded(&out);
+    let stdout = text(&out.stdout);
+    let mut lines = stdout.lines();
+    let header = lines.next().unwrap_or_default();
+    assert!(header.starts_with("P:D"), "{stdout}");
+    assert!(
+        lines.any(|l| l.starts_with("0:0 ")),
+        "no device 0:0 in:\n{stdout}"
+    );
+}
+
+#[test]
+fn help_mentions_device_and_examples() {
+    let dir = tempfile::tempdir().unwrap();
+    for args in [
+        &["--help"][..],
+        &["render", "--help"][..],
+        &["help", "render"][..],
+    ] {
+        let out = run(cltrace(dir.path(), args));
+        succeeded(&out);
+        let stdout = text(&out.stdout);
+        assert!(stdout.contains("--device"), "{args:?}:\n{stdout}");
+        assert!(stdout.contains("Examples:"), "{args:?}:\n{stdout}");
+        assert!(stdout.contains("cltrace render "), "{args:?}:\n{stdout}");
+        assert!(stdout.contains("Exit status"), "{args:?}:\n{stdout}");
+    }
+    let out = run(cltrace(dir.path(), &["render", "--help"]));
+    let stdout = text(&out.stdout);
+    for flag in [
+        "--width", "--height", "--fov", "--eye", "--method", "--hits",
+    ] {
+        assert!(stdout.contains(flag), "{flag}:\n{stdout}");
+    }
+    // help writes nothing into the folder
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}

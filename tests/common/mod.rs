@@ -1,0 +1,105 @@
+//! Shared test helpers: scenes, the OpenCL device, and the per-pixel oracle comparison.
+
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+use cltrace::camera::{Camera, Pinhole};
+use cltrace::device::{ClDevice, DeviceSelector};
+use cltrace::geometry::Ray;
+use cltrace::input::generate::Generator;
+use cltrace::layout::Triangle;
+use cltrace::mesh::Mesh;
+use cltrace::render::Frame;
+use cltrace::triangle::WatertightRay;
+
+/// The device the OpenCL tests run on: `CLTRACE_DEVICE` if set, else the default (PoCL in CI).
+pub fn device() -> ClDevice {
+    let selector = DeviceSelector::from_flag_or_env(None).expect("valid CLTRACE_DEVICE");
+    ClDevice::select(&selector).unwrap_or_else(|e| panic!("the OpenCL tests need a device: {e}"))
+}
+
+pub fn generate(g: Generator) -> Mesh {
+    g.generate().expect("valid generator")
+}
+
+/// `../shared/scenes/<name>` when the shared meshes are there; otherwise prints a notice
+/// and returns `None`, so the test skips.
+pub fn shared_scene(name: &str) -> Option<PathBuf> {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/scenes")
+        .join(name);
+    if path.exists() {
+        Some(path)
+    } else {
+        eprintln!(
+            "notice: {} is absent; skipping the part of the test that needs it",
+            path.display()
+        );
+        None
+    }
+}
+
+/// Relative distance within which two different triangles count as a tie.
+pub const TIE: f32 = 1e-5;
+
+/// Checks `frame` against the `reference` frame pixel by pixel: the same triangle, or a tie
+/// (both triangles really hit within [`TIE`] relative distance of each other). `triangles`
+/// are the mesh's triangles in file order, to re-check ties independently. Returns how many
+/// pixels differed by a tie, or a description of the first real mismatch.
+pub fn compare_frames(
+    reference: &Frame,
+    frame: &Frame,
+    camera: &Pinhole,
+    triangles: &[Triangle],
+) -> Result<usize, String> {
+    assert_eq!(
+        (reference.width, reference.height),
+        (frame.width, frame.height)
+    );
+    let mut ties = 0;
+    for y in 0..frame.height {
+        for x in 0..frame.width {
+            let (a, b) = (reference.hit(x, y), frame.hit(x, y));
+            let close = |s: f32, t: f32| (s - t).abs() <= TIE * s.abs().max(t.abs());
+            if a.prim == b.prim {
+                if a.is_miss() || close(a.t, b.t) {
+                    continue;
+                }
+                return Err(format!(
+                    "pixel ({x}, {y}): triangle {} at {} vs {}",
+                    a.prim, a.t, b.t
+                ));
+            }
+            let ray = camera.ray(x, y);
+            let tie = !a.is_miss()
+                && !b.is_miss()
+                && close(a.t, b.t)
+                && hit_distance(&ray, &triangles[b.prim as usize]).is_some_and(|t| close(t, a.t));
+            if !tie {
+                return Err(format!(
+                    "pixel ({x}, {y}): reference triangle {} at {}, got triangle {} at {}",
+                    a.prim as i64, a.t, b.prim as i64, b.t
+                ));
+            }
+            ties += 1;
+        }
+    }
+    Ok(ties)
+}
+
+/// Distance along `ray` to `tri`, if the ray hits it.
+pub fn hit_distance(ray: &Ray, tri: &Triangle) -> Option<f32> {
+    WatertightRay::new(ray)
+        .intersect_stored(tri, f32::INFINITY)
+        .map(|t| t * ray.dir.length())
+}
+
+/// Number of pixels that hit something.
+pub fn coverage(frame: &Frame) -> usize {
+    frame.hits.iter().filter(|h| !h.is_miss()).count()
+}
+
+pub fn auto_camera(mesh: &Mesh, width: u32, height: u32) -> Camera {
+    Camera::auto(&mesh.bounds(), width, height).unwrap()
+}
