@@ -11,8 +11,10 @@
 //! - [`device`]: OpenCL device selection, kernel compilation, pitched images;
 //! - [`render`]: the CPU reference tracers and the OpenCL renderer;
 //! - [`output`]: images and hit records, written atomically;
+//! - [`bench`]: the cross-device benchmark table;
 //! - [`commands`]: the subcommands the `cltrace` binary runs.
 
+pub mod bench;
 pub mod bvh;
 pub mod camera;
 pub mod commands;

@@ -5,6 +5,7 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
 
+use cltrace::bench::{self as benchmark, BenchRequest, RayKind};
 use cltrace::bvh::{BuildOptions, Builder};
 use cltrace::commands::{bvh, devices, render};
 use cltrace::input::scene_file::{CameraSettings, RenderSettings};
@@ -41,9 +42,105 @@ enum Command {
     Render(RenderArgs),
     /// List every OpenCL platform and device, with the index `--device` accepts
     Devices,
+    /// Measure every method on every OpenCL device for each scene and resolution (the
+    /// benchmark protocol of BENCHMARK.md) and print a Markdown table
+    #[command(after_help = BENCH_EXAMPLES)]
+    Bench(BenchArgs),
     /// Build a scene's BVH and print its statistics: nodes, leaves, depth, leaf sizes,
     /// SAH cost, build time and device bytes per triangle
     Bvh(BvhArgs),
+}
+
+const BENCH_EXAMPLES: &str = "\
+Examples:
+  cltrace bench                                   the built-in scene, every method and device
+  cltrace bench --scenes ../shared/scenes --csv results.csv
+  cltrace bench bunny.obj --methods cl-bvh --devices gpu --resolutions 1920x1080
+
+Each run: auto framing, one warm-up frame, then --repetitions frames; kernel time is the
+device's (OpenCL profiling events) or the trace's wall time (CPU methods). Mrays/s use the
+median. Brute-force runs whose frames (warm-up and repetitions together) are estimated to
+take more than --brute-budget seconds are listed as skipped, with the estimate.";
+
+#[derive(Args)]
+struct BenchArgs {
+    /// Scene files or meshes to measure [default: the built-in scene]
+    scenes: Vec<PathBuf>,
+
+    /// Also measure every mesh (.obj, .obj.gz, .ply, .ply.gz) in this folder
+    #[arg(long = "scenes", value_name = "DIR")]
+    scene_folders: Vec<PathBuf>,
+
+    /// Methods to measure, comma-separated
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "cpu-brute,cpu-bvh,cl-brute,cl-bvh"
+    )]
+    methods: Vec<Method>,
+
+    /// OpenCL devices: `all`, or comma-separated selectors (`P:D`, `gpu`, `cpu`, part of a name)
+    #[arg(long, default_value = "all")]
+    devices: String,
+
+    /// Ray kinds to measure, comma-separated
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "primary")]
+    rays: Vec<RayKind>,
+
+    /// Resolutions, comma-separated `WxH`
+    #[arg(long, value_delimiter = ',', value_parser = parse_resolution, default_value = "1920x1080,512x512")]
+    resolutions: Vec<(u32, u32)>,
+
+    /// Untimed frames before the timed ones
+    #[arg(long, default_value_t = 1)]
+    warmup: u32,
+
+    /// Timed frames per run
+    #[arg(long, default_value_t = 5)]
+    repetitions: u32,
+
+    /// Skip brute-force runs (all their frames) estimated to take longer than this, in seconds
+    #[arg(long, default_value_t = 10.0)]
+    brute_budget: f64,
+
+    /// Also write the rows as CSV
+    #[arg(long, value_name = "FILE")]
+    csv: Option<PathBuf>,
+
+    /// Also write the rows as JSON
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+
+    /// Instead of scenes: the BVH methods at 1920x1080 on generated hillsides of 10 thousand
+    /// to 10 million triangles, to show how build time, memory and speed grow
+    #[arg(long)]
+    scaling: bool,
+
+    /// With --scaling, also draw build time and Mrays/s against triangles into this PNG
+    #[arg(long, value_name = "FILE.png", requires = "scaling")]
+    plot: Option<PathBuf>,
+
+    #[command(flatten)]
+    build: BuildArgs,
+
+    /// Print nothing but the table and errors
+    #[arg(short, long, conflicts_with = "verbose")]
+    quiet: bool,
+
+    /// Also print each row as it is measured
+    #[arg(short, long)]
+    verbose: bool,
+}
+
+fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("`{s}` is not a resolution `WIDTHxHEIGHT`"))?;
+    match (w.trim().parse(), h.trim().parse()) {
+        (Ok(w), Ok(h)) => Ok((w, h)),
+        _ => Err(format!("`{s}` is not a resolution `WIDTHxHEIGHT`")),
+    }
 }
 
 #[derive(Args)]
@@ -167,6 +264,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => run_render(args),
         Command::Devices => devices::devices_table().map(|table| print!("{table}")),
+        Command::Bench(args) => run_bench(args),
         Command::Bvh(args) => {
             bvh::bvh_report(args.scene.as_deref(), &args.build.options(), args.repeat)
                 .map(|report| print!("{report}"))
@@ -216,5 +314,55 @@ fn run_render(args: RenderArgs) -> cltrace::Result<()> {
         outcome.method.name(),
     ));
     verbosity.say(outcome.timings.summary());
+    Ok(())
+}
+
+fn run_bench(args: BenchArgs) -> cltrace::Result<()> {
+    let request = BenchRequest {
+        scenes: args.scenes,
+        generated: Vec::new(),
+        scene_folders: args.scene_folders,
+        methods: args.methods,
+        devices: (!args.devices.trim().eq_ignore_ascii_case("all")).then(|| {
+            args.devices
+                .split(',')
+                .map(|s| s.trim().to_string())
+                .collect()
+        }),
+        ray_kinds: args.rays,
+        resolutions: args.resolutions,
+        warmup: args.warmup,
+        repetitions: args.repetitions,
+        brute_budget_s: args.brute_budget,
+        build: args.build.options(),
+        verbosity: Verbosity::from_flags(args.quiet, args.verbose),
+    };
+    if let Some(csv) = &args.csv {
+        cltrace::output::check_folder(csv)?;
+    }
+    if let Some(json) = &args.json {
+        cltrace::output::check_folder(json)?;
+    }
+    if let Some(plot) = &args.plot {
+        cltrace::output::check_folder(plot)?;
+    }
+    let rows = if args.scaling {
+        let rows = benchmark::run(&benchmark::scaling_request(&request))?;
+        print!("{}", benchmark::scaling_table(&rows));
+        if let Some(plot) = &args.plot {
+            benchmark::plot_scaling(&rows, plot)?;
+        }
+        rows
+    } else {
+        let rows = benchmark::run(&request)?;
+        print!("{}", benchmark::markdown(&rows));
+        rows
+    };
+    if let Some(csv) = &args.csv {
+        benchmark::write_csv(&rows, csv)?;
+    }
+    if let Some(json) = &args.json {
+        benchmark::write_json(&rows, json)?;
+    }
     Ok(())
 }

@@ -2,18 +2,13 @@
 
 use std::path::{Path, PathBuf};
 
-use indicatif::{ProgressBar, ProgressStyle};
-
-use crate::bvh::{BuildOptions, Bvh};
+use crate::bvh::BuildOptions;
 use crate::camera::Camera;
 use crate::device::{ClDevice, DeviceSelector};
 use crate::error::Result;
 use crate::input::scene_file::{CameraSettings, RenderSettings, SceneDescription};
-use crate::layout::{FlatBvh, triangles_in_order};
-use crate::mesh::Mesh;
 use crate::output;
-use crate::render::opencl::ClTracer;
-use crate::render::{Frame, Method, Shade, ShadeParams, cpu};
+use crate::render::{Frame, Method, Renderer, Shade, ShadeParams};
 use crate::report::{Timings, Verbosity};
 
 /// The method when neither the scene nor the flags name one.
@@ -111,61 +106,25 @@ pub fn run(req: &RenderRequest) -> Result<RenderOutcome> {
     ));
     let shade = ShadeParams::new(shade, &camera, &bounds);
 
-    let frame = match method {
-        Method::CpuBrute => trace_cpu_brute(&mesh, &camera, &shade, v, &mut timings),
-        Method::ClBrute => {
-            let device = device.as_ref().expect("opened above");
-            let program = timings.time("compile", || ClTracer::compile_brute(device))?;
-            let triangles = triangles_in_order(&mesh, 0..mesh.triangle_count() as u32);
-            let mut tracer =
-                timings.time("upload", || ClTracer::brute(device, &program, &triangles))?;
-            let (frame, times) = tracer.render(
-                &camera.pinhole(),
-                camera.width,
-                camera.height,
-                &shade,
-                v.progress(),
-            )?;
-            timings.add("kernel", times.kernel_ms);
-            timings.add("read-back", times.read_back_ms);
-            frame
-        }
-        Method::CpuBvh => {
-            let bvh = build_bvh(&mesh, &req.build, v, &mut timings);
-            let bar = (v.progress() && camera.width as u64 * camera.height as u64 > 1 << 24)
-                .then(|| rows_bar(camera.height, "tracing on the CPU"));
-            let frame = timings.time("trace", || {
-                cpu::render(
-                    &bvh,
-                    &camera.pinhole(),
-                    camera.width,
-                    camera.height,
-                    &shade,
-                    bar.as_ref(),
-                )
-            });
-            if let Some(b) = bar {
-                b.finish_and_clear();
-            }
-            frame
-        }
-        Method::ClBvh => {
-            let device = device.as_ref().expect("opened above");
-            let bvh = build_bvh(&mesh, &req.build, v, &mut timings);
-            let program = timings.time("compile", || ClTracer::compile_bvh(device, bvh.depth))?;
-            let mut tracer = timings.time("upload", || ClTracer::bvh(device, &program, &bvh))?;
-            let (frame, times) = tracer.render(
-                &camera.pinhole(),
-                camera.width,
-                camera.height,
-                &shade,
-                v.progress(),
-            )?;
-            timings.add("kernel", times.kernel_ms);
-            timings.add("read-back", times.read_back_ms);
-            frame
-        }
-    };
+    let mut renderer = Renderer::prepare(method, &mesh, &req.build, device.as_ref(), &mut timings)?;
+    if let Some(s) = &renderer.bvh {
+        v.detail(format!(
+            "bvh: {} nodes, {} leaves, depth {}, mean leaf {:.2}, SAH cost {:.2}, {} threads",
+            s.nodes,
+            s.leaves,
+            s.depth,
+            s.mean_leaf_size,
+            s.sah_cost,
+            rayon::current_num_threads()
+        ));
+    }
+    let (frame, times) = renderer.render(&camera, &shade, v.progress())?;
+    if method.uses_opencl() {
+        timings.add("kernel", times.trace_ms);
+        timings.add("read-back", times.read_back_ms);
+    } else {
+        timings.add("trace", times.trace_ms);
+    }
 
     timings.time("write", || -> Result<()> {
         output::write_image(&frame, &req.output)?;
@@ -180,57 +139,4 @@ pub fn run(req: &RenderRequest) -> Result<RenderOutcome> {
         device: device.map(|d| d.info.name),
         timings,
     })
-}
-
-/// Builds the BVH and its flat layout, timed as "build", with details under `--verbose`.
-fn build_bvh(mesh: &Mesh, options: &BuildOptions, v: Verbosity, timings: &mut Timings) -> FlatBvh {
-    let bvh = timings.time("build", || Bvh::build(mesh, options));
-    let stats = bvh.stats();
-    v.detail(format!(
-        "bvh: {} nodes, {} leaves, depth {}, mean leaf {:.2}, SAH cost {:.2}, {} threads",
-        stats.nodes,
-        stats.leaves,
-        stats.depth,
-        stats.mean_leaf_size,
-        stats.sah_cost,
-        rayon::current_num_threads()
-    ));
-    timings.time("layout", || FlatBvh::new(bvh, mesh))
-}
-
-fn trace_cpu_brute(
-    mesh: &Mesh,
-    camera: &Camera,
-    shade: &ShadeParams,
-    v: Verbosity,
-    timings: &mut Timings,
-) -> Frame {
-    let tracer = cpu::BruteForce {
-        triangles: triangles_in_order(mesh, 0..mesh.triangle_count() as u32),
-    };
-    let work = mesh.triangle_count() as f64 * camera.width as f64 * camera.height as f64;
-    let bar = (v.progress() && work > 1e9).then(|| rows_bar(camera.height, "tracing on the CPU"));
-    let frame = timings.time("trace", || {
-        cpu::render(
-            &tracer,
-            &camera.pinhole(),
-            camera.width,
-            camera.height,
-            shade,
-            bar.as_ref(),
-        )
-    });
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
-    frame
-}
-
-fn rows_bar(rows: u32, message: &'static str) -> ProgressBar {
-    ProgressBar::new(rows as u64)
-        .with_style(
-            ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} rows, {eta} left")
-                .expect("valid template"),
-        )
-        .with_message(message)
 }

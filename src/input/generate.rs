@@ -53,6 +53,13 @@ pub enum Generator {
         #[serde(default)]
         seed: u64,
     },
+    /// The landscape tilted up by 60 degrees about x, so that a camera on the +z axis (the
+    /// auto framing) looks down onto it: the scaling benchmark's mesh.
+    Hillside {
+        resolution: u32,
+        #[serde(default)]
+        seed: u64,
+    },
 }
 
 fn default_levels() -> u32 {
@@ -101,6 +108,9 @@ impl Generator {
             Generator::Landscape { resolution, seed } => {
                 format!("landscape(resolution={resolution},seed={seed})")
             }
+            Generator::Hillside { resolution, seed } => {
+                format!("hillside(resolution={resolution},seed={seed})")
+            }
         }
     }
 
@@ -122,7 +132,9 @@ impl Generator {
             Generator::Cube {} => 12,
             Generator::NestedBoxes { count } => 12 * count as u64,
             Generator::Soup { triangles, .. } => triangles as u64,
-            Generator::Landscape { resolution, .. } => 2 * resolution as u64 * resolution as u64,
+            Generator::Landscape { resolution, .. } | Generator::Hillside { resolution, .. } => {
+                2 * resolution as u64 * resolution as u64
+            }
         }
     }
 
@@ -141,6 +153,14 @@ impl Generator {
             Generator::Soup { triangles, seed } => soup(triangles, seed),
             Generator::Landscape { resolution, seed } => {
                 landscape(resolution, 1.0, 0.15, seed, Vec3::ZERO)
+            }
+            Generator::Hillside { resolution, seed } => {
+                let mut mesh = landscape(resolution, 1.0, 0.15, seed, Vec3::ZERO);
+                let tilt = Mat3::from_rotation_x(60f32.to_radians());
+                for p in &mut mesh.positions {
+                    *p = tilt * *p;
+                }
+                mesh
             }
         })
     }
@@ -177,7 +197,9 @@ impl Generator {
             Generator::Soup { triangles: 0, .. } => {
                 return bad("triangles", "at least 1");
             }
-            Generator::Landscape { resolution, .. } if resolution == 0 || resolution > 8192 => {
+            Generator::Landscape { resolution, .. } | Generator::Hillside { resolution, .. }
+                if resolution == 0 || resolution > 8192 =>
+            {
                 return bad("resolution", "between 1 and 8192");
             }
             _ => {}
@@ -461,6 +483,10 @@ mod tests {
             },
             Generator::Landscape {
                 resolution: 5,
+                seed: 2,
+            },
+            Generator::Hillside {
+                resolution: 3,
                 seed: 2,
             },
         ] {

@@ -3,8 +3,10 @@
 
 pub mod cpu;
 pub mod opencl;
+mod renderer;
 mod shade;
 
+pub use renderer::{Renderer, TraceTimes};
 pub use shade::ShadeParams;
 
 use bytemuck::{Pod, Zeroable};

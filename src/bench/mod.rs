@@ -1,0 +1,390 @@
+//! `cltrace bench`: every method on every device for every scene and resolution, timed
+//! as `BENCHMARK.md` says (auto framing, warm-up, median and minimum of repetitions, device
+//! time from profiling events), one row per run.
+
+mod scaling;
+mod table;
+
+pub use scaling::{SCALING_SIZES, plot_scaling, scaling_request, scaling_table};
+pub use table::{markdown, write_csv, write_json};
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+
+use crate::bvh::BuildOptions;
+use crate::camera::Camera;
+use crate::device::{ClDevice, DeviceSelector, list_devices};
+use crate::error::{Error, Result};
+use crate::input::MeshFormat;
+use crate::input::generate::Generator;
+use crate::input::scene_file::MeshSource;
+use crate::mesh::Mesh;
+use crate::render::{Method, Renderer, Shade, ShadeParams};
+use crate::report::{Timings, Verbosity};
+
+/// The kinds of rays of the benchmark protocol.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RayKind {
+    /// One closest-hit ray per pixel from the eye.
+    Primary,
+}
+
+impl RayKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            RayKind::Primary => "primary",
+        }
+    }
+}
+
+/// What to measure.
+#[derive(Clone, Debug)]
+pub struct BenchRequest {
+    /// Scenes (scene files or meshes); the built-in default scene when this and
+    /// `generated` are empty.
+    pub scenes: Vec<PathBuf>,
+    /// Generated meshes to measure.
+    pub generated: Vec<Generator>,
+    /// Folders whose every mesh is added.
+    pub scene_folders: Vec<PathBuf>,
+    pub methods: Vec<Method>,
+    /// Device selectors; `None` for every device.
+    pub devices: Option<Vec<String>>,
+    pub ray_kinds: Vec<RayKind>,
+    pub resolutions: Vec<(u32, u32)>,
+    pub warmup: u32,
+    pub repetitions: u32,
+    /// Brute-force runs estimated to take longer than this (seconds) are skipped.
+    pub brute_budget_s: f64,
+    pub build: BuildOptions,
+    pub verbosity: Verbosity,
+}
+
+/// One measured (or skipped) run: the columns of `BENCHMARK.md`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BenchRow {
+    pub scene: String,
+    pub triangles: usize,
+    pub width: u32,
+    pub height: u32,
+    pub method: String,
+    pub device: String,
+    pub compute_units: u32,
+    pub ray_kind: String,
+    pub rays: u64,
+    pub load_ms: f64,
+    /// BVH build time, for the BVH methods.
+    pub build_ms: Option<f64>,
+    pub build_threads: Option<usize>,
+    /// Kernel (OpenCL, from profiling events) or trace (CPU, wall) time per frame.
+    pub kernel_ms_median: Option<f64>,
+    pub kernel_ms_min: Option<f64>,
+    /// Host wall time around each frame (launches, waits, read-back), median.
+    pub wall_ms_median: Option<f64>,
+    /// Rays per second of kernel time (median), in millions.
+    pub mrays_per_s: Option<f64>,
+    pub sah_cost: Option<f64>,
+    /// Scene data the tracer reads (triangles, nodes), MB.
+    pub device_mb: f64,
+    /// Why the run was not measured, e.g. a brute force over the time budget.
+    pub skipped: Option<String>,
+}
+
+/// A scene to measure: its source and name.
+struct BenchScene {
+    source: MeshSource,
+    name: String,
+}
+
+/// Where a method runs: the host, or an OpenCL device.
+enum Target {
+    Host,
+    Device(ClDevice),
+}
+
+/// Runs the whole matrix and returns its rows (also printed as they come, with
+/// `--verbose`). A progress bar on stderr counts the runs.
+pub fn run(req: &BenchRequest) -> Result<Vec<BenchRow>> {
+    req.build.check()?;
+    if req.repetitions == 0 {
+        return Err(Error::Invalid("--repetitions must be at least 1".into()));
+    }
+    for &(w, h) in &req.resolutions {
+        crate::camera::check_settings(&crate::input::scene_file::CameraSettings {
+            width: Some(w),
+            height: Some(h),
+            ..Default::default()
+        })?;
+    }
+    let scenes = scenes(req)?;
+    let targets = targets(req)?;
+    let runs_per_scene: usize = req
+        .methods
+        .iter()
+        .map(|m| {
+            if m.uses_opencl() {
+                targets
+                    .iter()
+                    .filter(|t| matches!(t, Target::Device(_)))
+                    .count()
+            } else {
+                1
+            }
+        })
+        .sum::<usize>()
+        * req.resolutions.len()
+        * req.ray_kinds.len();
+    let bar = if req.verbosity.progress() {
+        ProgressBar::new((runs_per_scene * scenes.len()) as u64)
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{msg:40} [{bar:30}] {pos}/{len} runs, {elapsed}")
+            .expect("valid template"),
+    );
+
+    let mut rows = Vec::new();
+    for scene in &scenes {
+        bar.set_message(format!("loading {}", scene.name));
+        let start = Instant::now();
+        let mesh = scene.source.load()?;
+        let load_ms = start.elapsed().as_secs_f64() * 1e3;
+        for &method in &req.methods {
+            for target in &targets {
+                let device = match (method.uses_opencl(), target) {
+                    (true, Target::Device(d)) => Some(d),
+                    (false, Target::Host) => None,
+                    _ => continue,
+                };
+                bar.set_message(format!(
+                    "{} {} {}",
+                    scene.name,
+                    method.name(),
+                    device_name(device)
+                ));
+                let mut timings = Timings::default();
+                let mut renderer =
+                    Renderer::prepare(method, &mesh, &req.build, device, &mut timings)?;
+                for &(width, height) in &req.resolutions {
+                    for &kind in &req.ray_kinds {
+                        let row = measure(
+                            req,
+                            scene,
+                            &mesh,
+                            load_ms,
+                            method,
+                            device,
+                            &timings,
+                            &mut renderer,
+                            (width, height),
+                            kind,
+                        )?;
+                        if req.verbosity >= Verbosity::Verbose {
+                            bar.suspend(|| eprintln!("{}", table::row_line(&row)));
+                        }
+                        rows.push(row);
+                        bar.inc(1);
+                    }
+                }
+            }
+        }
+    }
+    bar.finish_and_clear();
+    Ok(rows)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn measure(
+    req: &BenchRequest,
+    scene: &BenchScene,
+    mesh: &Mesh,
+    load_ms: f64,
+    method: Method,
+    device: Option<&ClDevice>,
+    timings: &Timings,
+    renderer: &mut Renderer,
+    (width, height): (u32, u32),
+    kind: RayKind,
+) -> Result<BenchRow> {
+    let camera = Camera::auto(&mesh.bounds(), width, height)?;
+    let shade = ShadeParams::new(Shade::Lambert, &camera, &mesh.bounds());
+    let rays = width as u64 * height as u64;
+    let mut row = BenchRow {
+        scene: scene.name.clone(),
+        triangles: mesh.triangle_count(),
+        width,
+        height,
+        method: method.name().to_string(),
+        device: device_name(device),
+        compute_units: device.map_or_else(
+            || rayon::current_num_threads() as u32,
+            |d| d.info.compute_units,
+        ),
+        ray_kind: kind.name().to_string(),
+        rays,
+        load_ms,
+        build_ms: timings.get("build"),
+        build_threads: method.uses_bvh().then(rayon::current_num_threads),
+        kernel_ms_median: None,
+        kernel_ms_min: None,
+        wall_ms_median: None,
+        mrays_per_s: None,
+        sah_cost: renderer.bvh.map(|s| s.sah_cost),
+        device_mb: renderer.scene_bytes as f64 / 1e6,
+        skipped: None,
+    };
+    if matches!(method, Method::CpuBrute | Method::ClBrute) {
+        // Time a thumbnail of the same view, about 2^24 ray/triangle tests, and scale it up
+        // to the whole run (warm-up and repetitions).
+        let pixels = ((1u64 << 24) / mesh.triangle_count() as u64).clamp(16, rays);
+        let scale = (pixels as f64 / rays as f64).sqrt();
+        let probe = Camera {
+            width: ((width as f64 * scale).ceil() as u32).max(1),
+            height: ((height as f64 * scale).ceil() as u32).max(1),
+            ..camera
+        };
+        let (_, t) = renderer.render(&probe, &shade, false)?;
+        let frames = (req.warmup + req.repetitions) as f64;
+        let estimate_s =
+            t.trace_ms / (probe.width as f64 * probe.height as f64) * rays as f64 * frames / 1e3;
+        if estimate_s > req.brute_budget_s {
+            row.skipped = Some(format!(
+                "estimated {estimate_s:.0} s for {frames} frames > {} s budget",
+                req.brute_budget_s
+            ));
+            return Ok(row);
+        }
+    }
+    for _ in 0..req.warmup {
+        renderer.render(&camera, &shade, false)?;
+    }
+    let mut kernel = Vec::new();
+    let mut wall = Vec::new();
+    for _ in 0..req.repetitions {
+        let start = Instant::now();
+        let (_, t) = renderer.render(&camera, &shade, false)?;
+        wall.push(start.elapsed().as_secs_f64() * 1e3);
+        kernel.push(t.trace_ms);
+    }
+    let median_kernel = median(&mut kernel);
+    row.kernel_ms_median = Some(median_kernel);
+    row.kernel_ms_min = kernel.iter().copied().reduce(f64::min);
+    row.wall_ms_median = Some(median(&mut wall));
+    row.mrays_per_s = Some(rays as f64 / median_kernel / 1e3);
+    Ok(row)
+}
+
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        (values[n / 2 - 1] + values[n / 2]) / 2.0
+    }
+}
+
+fn device_name(device: Option<&ClDevice>) -> String {
+    match device {
+        Some(d) => format!("{} ({})", d.info.name, d.info.platform_name),
+        None => format!("host: {}", host_cpu_name()),
+    }
+}
+
+/// The host processor's model name, from /proc/cpuinfo where there is one.
+pub fn host_cpu_name() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|info| {
+            info.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|name| name.trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string())
+}
+
+fn scenes(req: &BenchRequest) -> Result<Vec<BenchScene>> {
+    let mut scenes = Vec::new();
+    let mut generated = req.generated.clone();
+    if req.scenes.is_empty() && generated.is_empty() {
+        generated.push(Generator::default_scene());
+    }
+    for g in generated {
+        scenes.push(BenchScene {
+            name: g.name(),
+            source: MeshSource::Generator(g),
+        });
+    }
+    for path in &req.scenes {
+        let description = crate::commands::render::describe_scene(Some(path))?;
+        scenes.push(BenchScene {
+            name: description.mesh.name(),
+            source: description.mesh,
+        });
+    }
+    for folder in &req.scene_folders {
+        let mut found: Vec<PathBuf> = std::fs::read_dir(folder)
+            .map_err(|e| Error::input(folder, crate::input::io_reason(&e)))?
+            .filter_map(|entry| entry.ok().map(|e| e.path()))
+            .filter(|p| p.is_file() && MeshFormat::from_path(p).is_some())
+            .collect();
+        found.sort();
+        if found.is_empty() {
+            return Err(Error::input(
+                folder,
+                "holds no .obj, .obj.gz, .ply or .ply.gz mesh",
+            ));
+        }
+        scenes.extend(found.into_iter().map(|p| BenchScene {
+            name: file_name(&p),
+            source: MeshSource::File(p),
+        }));
+    }
+    Ok(scenes)
+}
+
+fn file_name(p: &Path) -> String {
+    p.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// The host, if a CPU method is asked for, and the OpenCL devices, if an OpenCL one is.
+fn targets(req: &BenchRequest) -> Result<Vec<Target>> {
+    let mut targets = Vec::new();
+    if req.methods.iter().any(|m| !m.uses_opencl()) {
+        targets.push(Target::Host);
+    }
+    if req.methods.iter().any(|m| m.uses_opencl()) {
+        let all = list_devices()?;
+        let chosen: Vec<_> = match &req.devices {
+            None => all.clone(),
+            Some(selectors) => {
+                let mut chosen: Vec<crate::device::DeviceInfo> = Vec::new();
+                for s in selectors {
+                    let info = s.parse::<DeviceSelector>()?.pick(&all)?.clone();
+                    if !chosen.iter().any(|c| c.index() == info.index()) {
+                        chosen.push(info);
+                    }
+                }
+                chosen
+            }
+        };
+        if chosen.is_empty() {
+            return Err(Error::Device(format!(
+                "no OpenCL device found: {}",
+                crate::device::INSTALL_HINT
+            )));
+        }
+        for info in chosen {
+            targets.push(Target::Device(ClDevice::open(info)?));
+        }
+    }
+    Ok(targets)
+}

@@ -1,0 +1,98 @@
+//! The benchmark rows as a Markdown table, CSV and JSON.
+
+use std::path::Path;
+
+use super::BenchRow;
+use crate::error::{Error, Result};
+use crate::output::write_atomically;
+
+const HEADER: [&str; 15] = [
+    "scene",
+    "triangles",
+    "resolution",
+    "method",
+    "device",
+    "CUs",
+    "rays",
+    "load ms",
+    "build ms",
+    "threads",
+    "kernel ms (median)",
+    "kernel ms (min)",
+    "Mrays/s",
+    "SAH cost",
+    "device MB",
+];
+
+fn num(v: Option<f64>) -> String {
+    match v {
+        None => "-".into(),
+        Some(v) if v >= 100.0 => format!("{v:.0}"),
+        Some(v) if v >= 10.0 => format!("{v:.1}"),
+        Some(v) if v >= 1.0 => format!("{v:.2}"),
+        Some(v) => format!("{v:.3}"),
+    }
+}
+
+fn cells(r: &BenchRow) -> [String; 15] {
+    let (median, min, mrays) = match &r.skipped {
+        Some(why) => (format!("skipped: {why}"), "-".into(), "-".into()),
+        None => (
+            num(r.kernel_ms_median),
+            num(r.kernel_ms_min),
+            num(r.mrays_per_s),
+        ),
+    };
+    [
+        r.scene.clone(),
+        r.triangles.to_string(),
+        format!("{}x{}", r.width, r.height),
+        r.method.clone(),
+        r.device.clone(),
+        r.compute_units.to_string(),
+        r.ray_kind.clone(),
+        num(Some(r.load_ms)),
+        num(r.build_ms),
+        r.build_threads.map_or("-".into(), |t| t.to_string()),
+        median,
+        min,
+        mrays,
+        r.sah_cost.map_or("-".into(), |c| format!("{c:.2}")),
+        format!("{:.1}", r.device_mb),
+    ]
+}
+
+/// One row as a line, for progress output.
+pub(super) fn row_line(r: &BenchRow) -> String {
+    cells(r).join(" | ")
+}
+
+/// The rows as a Markdown table.
+pub fn markdown(rows: &[BenchRow]) -> String {
+    let mut out = format!("| {} |\n", HEADER.join(" | "));
+    out += &format!("|{}\n", HEADER.iter().map(|_| "---|").collect::<String>());
+    for r in rows {
+        out += &format!("| {} |\n", cells(r).join(" | "));
+    }
+    out
+}
+
+/// The rows as CSV, one column per field, written atomically.
+pub fn write_csv(rows: &[BenchRow], path: &Path) -> Result<()> {
+    crate::output::check_folder(path)?;
+    write_atomically(path, |w| {
+        let mut csv = csv::Writer::from_writer(w);
+        for r in rows {
+            csv.serialize(r).map_err(|e| Error::output(path, e))?;
+        }
+        csv.flush().map_err(|e| Error::output(path, e))
+    })
+}
+
+/// The rows as a JSON array of objects, written atomically.
+pub fn write_json(rows: &[BenchRow], path: &Path) -> Result<()> {
+    crate::output::check_folder(path)?;
+    write_atomically(path, |w| {
+        serde_json::to_writer_pretty(w, rows).map_err(|e| Error::output(path, e))
+    })
+}
