@@ -239,22 +239,12 @@ fn measure(
         skipped: None,
     };
     if matches!(method, Method::CpuBrute | Method::ClBrute) {
-        // Time a thumbnail of the same view, about 2^24 ray/triangle tests, and scale it up
-        // to the whole run (warm-up and repetitions).
-        let pixels = ((1u64 << 24) / mesh.triangle_count() as u64).clamp(16, rays);
-        let scale = (pixels as f64 / rays as f64).sqrt();
-        let probe = Camera {
-            width: ((width as f64 * scale).ceil() as u32).max(1),
-            height: ((height as f64 * scale).ceil() as u32).max(1),
-            ..camera
-        };
-        let (_, t) = renderer.render(&probe, &shade, false)?;
-        let frames = (req.warmup + req.repetitions) as f64;
-        let estimate_s =
-            t.trace_ms / (probe.width as f64 * probe.height as f64) * rays as f64 * frames / 1e3;
+        let estimate_s = brute_estimate_s(renderer, &camera, &shade, mesh.triangle_count())?
+            * (req.warmup + req.repetitions) as f64;
         if estimate_s > req.brute_budget_s {
             row.skipped = Some(format!(
-                "estimated {estimate_s:.0} s for {frames} frames > {} s budget",
+                "estimated {estimate_s:.0} s for {} frames > {} s budget",
+                req.warmup + req.repetitions,
                 req.brute_budget_s
             ));
             return Ok(row);
@@ -277,6 +267,34 @@ fn measure(
     row.wall_ms_median = Some(median(&mut wall));
     row.mrays_per_s = Some(rays as f64 / median_kernel / 1e3);
     Ok(row)
+}
+
+/// Seconds one brute-force frame of `camera` will take, from thumbnails of the same view:
+/// the first about 2^24 ray/triangle tests, each next one 8 times larger, until a thumbnail
+/// takes 20 ms (a GPU needs enough work to fill it before its times mean anything) or is
+/// the frame itself.
+fn brute_estimate_s(
+    renderer: &mut Renderer,
+    camera: &Camera,
+    shade: &ShadeParams,
+    triangles: usize,
+) -> Result<f64> {
+    let rays = camera.width as u64 * camera.height as u64;
+    let mut pixels = ((1u64 << 24) / triangles as u64).clamp(16, rays);
+    loop {
+        let scale = (pixels as f64 / rays as f64).sqrt();
+        let probe = Camera {
+            width: ((camera.width as f64 * scale).ceil() as u32).clamp(1, camera.width),
+            height: ((camera.height as f64 * scale).ceil() as u32).clamp(1, camera.height),
+            ..*camera
+        };
+        let (_, t) = renderer.render(&probe, shade, false)?;
+        let probed = probe.width as f64 * probe.height as f64;
+        if t.trace_ms >= 20.0 || probed as u64 >= rays {
+            return Ok(t.trace_ms / probed * rays as f64 / 1e3);
+        }
+        pixels = (pixels * 8).min(rays);
+    }
 }
 
 fn median(values: &mut [f64]) -> f64 {

@@ -345,7 +345,10 @@ impl Ctx {
         };
         match split {
             Split::Leaf => None,
-            Split::At { mid, left, right } => Some((mid, left, right)),
+            // Both sides hold triangles for any checked mesh; should NaNs have slipped in,
+            // fall back rather than recurse on an empty side.
+            Split::At { mid, left, right } if mid > 0 && mid < n => Some((mid, left, right)),
+            Split::At { .. } => Some(median_split(prims, centroids, scratch)),
             Split::None if n <= max_leaf => None,
             Split::None => Some(median_split(prims, centroids, scratch)),
         }
@@ -373,17 +376,10 @@ impl Ctx {
         let extent = Vec3A::select(usable, extent, Vec3A::ZERO);
         let last = Vec3A::splat((bins - 1) as f32);
         let bin_of = |p: &Bounds| -> [u8; 3] {
+            // In [0, bins - 1] for a checked mesh; `as` saturates anything else (NaN to 0),
+            // so even an unchecked mesh cannot index out of the bins.
             let k = ((p.centroid() - centroids.min) * scale).min(last);
-            // SAFETY: every lane is finite and in [0, bins - 1], within u8: centroids are
-            // finite and at least `centroids.min`, the scale is finite and non-negative, and
-            // `min` clamps to `bins - 1`.
-            unsafe {
-                [
-                    k.x.to_int_unchecked::<u8>(),
-                    k.y.to_int_unchecked::<u8>(),
-                    k.z.to_int_unchecked::<u8>(),
-                ]
-            }
+            [k.x as u8, k.y as u8, k.z as u8]
         };
 
         if prims.len() > PARALLEL_BINNING {

@@ -100,7 +100,9 @@ pub struct Bvh {
 }
 
 impl Bvh {
-    /// Builds a BVH over the mesh's triangles with rayon's threads.
+    /// Builds a BVH over the mesh's triangles with rayon's threads. The mesh is meant to
+    /// have passed [`Mesh::check`]; any other (NaN coordinates, say) still builds a valid
+    /// tree, of no particular quality, without panicking.
     pub fn build(mesh: &Mesh, options: &BuildOptions) -> Bvh {
         build::build(mesh, options)
     }

@@ -75,17 +75,25 @@ pub fn run(req: &RenderRequest) -> Result<RenderOutcome> {
         output::check_folder(hits)?;
     }
     crate::camera::check_settings(&camera_settings)?;
-    let device = if method.uses_opencl() {
-        let selector = DeviceSelector::from_flag_or_env(req.device.as_deref())?;
-        let device = ClDevice::select(&selector)?;
-        v.detail(format!("device: {}", device.info));
-        Some(device)
-    } else {
-        None
-    };
+    let selector = DeviceSelector::from_flag_or_env(req.device.as_deref())?;
 
+    // Opening a GPU driver takes a few hundred milliseconds: do it while the mesh loads.
+    // A device error still wins over a mesh error, as it would have come first.
     let mut timings = Timings::default();
-    let mesh = timings.time("load", || scene.mesh.load())?;
+    let (device, mesh) = std::thread::scope(|s| {
+        let opening = method
+            .uses_opencl()
+            .then(|| s.spawn(|| ClDevice::select(&selector)));
+        let mesh = timings.time("load", || scene.mesh.load());
+        let device = match opening {
+            Some(handle) => Some(handle.join().expect("opening a device does not panic")?),
+            None => None,
+        };
+        Ok::<_, crate::Error>((device, mesh?))
+    })?;
+    if let Some(d) = &device {
+        v.detail(format!("device: {}", d.info));
+    }
     v.detail(format!(
         "mesh: {} ({} triangles, {} vertices, {} of zero area)",
         scene.mesh.name(),
