@@ -117,6 +117,118 @@ inline float intersect_stored(const WatertightRay* r, const __global Triangle* t
     return intersect_triangle(r, load3(tri->v0), load3(tri->v1), load3(tri->v2), t_max);
 }
 
+/* ---- traversal ----------------------------------------------------------------------- */
+
+/* A program is compiled for one of two scenes: with STACK_SIZE defined (the BVH's depth)
+ * kernels traverse the BVH, without it they test every triangle. SCENE_PARAMS declares the
+ * scene's kernel parameters and SCENE passes them on, so every kernel is written once. */
+
+#define STATUS_STACK_OVERFLOW 1u
+
+#ifdef STACK_SIZE
+
+#define SCENE_PARAMS __global const BvhNode* nodes, __global const Triangle* tris, __global uint* status
+#define SCENE nodes, tris, status
+
+/* Entry distance into `node`'s box if the ray meets it before t_max, else -1. */
+inline float hit_box(const __global BvhNode* node, float3 org, float3 inv, float t_max) {
+    float t0x = (node->min[0] - org.x) * inv.x, t1x = (node->max[0] - org.x) * inv.x;
+    float t0y = (node->min[1] - org.y) * inv.y, t1y = (node->max[1] - org.y) * inv.y;
+    float t0z = (node->min[2] - org.z) * inv.z, t1z = (node->max[2] - org.z) * inv.z;
+    float near = fmax(fmax(fmin(t0x, t1x), fmin(t0y, t1y)), fmax(fmin(t0z, t1z), 0.0f));
+    float far = fmin(fmin(fmin(fmax(t0x, t1x), fmax(t0y, t1y)), fmax(t0z, t1z)) * ROBUST_EXIT, t_max);
+    return near <= far ? near : -1.0f;
+}
+
+/* The triangle (index into tris) the ray (org, dir) hits first in (0, t_max), or with
+ * any_hit the first one found at all; MISS for none. *t_hit gets the ray parameter.
+ * A stack in private memory, nearer child first, boxes beyond the closest hit skipped;
+ * mirrors src/bvh/traverse.rs step for step. The stack holds STACK_SIZE entries, the
+ * tree's depth, which a traversal never needs more than; should it anyway, bit 0 of
+ * *status is set and the ray reported as a miss, never written out of bounds. */
+inline uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
+    WatertightRay ray = watertight_ray(org, dir);
+    float3 inv = safe_inverse(dir);
+    float t = t_max;
+    uint best = MISS;
+    uint stack_node[STACK_SIZE];
+    float stack_entry[STACK_SIZE];
+    uint sp = 0;
+    uint node = 0;
+    bool live = hit_box(&nodes[0], org, inv, t) >= 0.0f;
+    while (live) {
+        const __global BvhNode* n = &nodes[node];
+        bool descend = false;
+        if (n->right_or_count & LEAF_FLAG) {
+            uint first = n->left_or_first, end = first + (n->right_or_count & ~LEAF_FLAG);
+            for (uint i = first; i < end; ++i) {
+                float h = intersect_stored(&ray, &tris[i], t);
+                if (h >= 0.0f) {
+                    t = h;
+                    best = i;
+                    if (any_hit) { *t_hit = t; return best; }
+                }
+            }
+        } else {
+            uint l = n->left_or_first, r = n->right_or_count;
+            float tl = hit_box(&nodes[l], org, inv, t);
+            float tr = hit_box(&nodes[r], org, inv, t);
+            if (tl >= 0.0f && tr >= 0.0f) {
+                if (sp >= STACK_SIZE) { atomic_or(status, STATUS_STACK_OVERFLOW); return MISS; }
+                bool right_first = tr < tl;
+                stack_node[sp] = right_first ? l : r;
+                stack_entry[sp] = right_first ? tl : tr;
+                ++sp;
+                node = right_first ? r : l;
+                descend = true;
+            } else if (tl >= 0.0f) {
+                node = l;
+                descend = true;
+            } else if (tr >= 0.0f) {
+                node = r;
+                descend = true;
+            }
+        }
+        if (!descend) {
+            /* Pop the next node still nearer than the closest hit. */
+            live = false;
+            while (sp > 0) {
+                --sp;
+                if (stack_entry[sp] <= t) { node = stack_node[sp]; live = true; break; }
+            }
+        }
+    }
+    *t_hit = t;
+    return best;
+}
+
+#else
+
+#define SCENE_PARAMS __global const Triangle* tris, uint tri_count
+#define SCENE tris, tri_count
+
+/* Brute force: every triangle, the first in order winning a tie (or, with any_hit, the
+ * first hit at all). Same contract as the BVH's trace above. */
+inline uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
+    WatertightRay ray = watertight_ray(org, dir);
+    float t = t_max;
+    uint best = MISS;
+    for (uint i = 0; i < tri_count; ++i) {
+        float h = intersect_stored(&ray, &tris[i], t);
+        if (h >= 0.0f) {
+            t = h;
+            best = i;
+            if (any_hit) break;
+        }
+    }
+    *t_hit = t;
+    return best;
+}
+
+#endif
+
+inline float length3(float3 d) { return sqrt(d.x * d.x + d.y * d.y + d.z * d.z); }
+
 /* ---- shading and output -------------------------------------------------------------- */
 
 inline uint quantize(float v) { return (uint)(clamp(v, 0.0f, 1.0f) * 255.0f + 0.5f); }
@@ -156,7 +268,7 @@ inline void store_pixel(__global Hit* hits, uint hit_pitch, __global uint* color
         h.prim = MISS;
         h.t = INFINITY;
     } else {
-        float distance = t * sqrt(dir.x * dir.x + dir.y * dir.y + dir.z * dir.z);
+        float distance = t * length3(dir);
         h.prim = tris[best].prim;
         h.t = distance;
         color = shade_hit(shade, near, far, &tris[best], distance, dir);

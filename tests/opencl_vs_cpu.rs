@@ -333,3 +333,92 @@ fn stack_overflow_is_an_error_not_an_image() {
             .is_ok()
     );
 }
+
+/// Arbitrary rays from a buffer, closest and any hit, brute force and BVH, against the host.
+#[test]
+fn ray_buffers_match_the_host_for_closest_and_any_hits() {
+    use cltrace::geometry::Ray;
+    use cltrace::render::cpu::ClosestHit;
+    use glam::Vec3;
+
+    let device = device();
+    let mesh = generate(Generator::Soup {
+        triangles: 3000,
+        seed: 5,
+    });
+    let brute = cpu::BruteForce {
+        triangles: triangles_in_order(&mesh, 0..mesh.triangle_count() as u32),
+    };
+    let flat = FlatBvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
+    let mut state = 12345u32;
+    let mut unit = move || {
+        state = state.wrapping_mul(1664525).wrapping_add(1013904223);
+        (state >> 8) as f32 / (1u32 << 24) as f32
+    };
+    let rays: Vec<Ray> = (0..4000)
+        .map(|_| {
+            let o = Vec3::new(unit(), unit(), unit()) * 2.0 - 0.5;
+            let d = Vec3::new(unit(), unit(), unit()) - 0.5;
+            Ray::new(o, if d.length() > 1e-3 { d } else { Vec3::X })
+        })
+        .collect();
+    let t_max = 0.7;
+    let mut bvh_tracer = ClTracer::bvh(
+        &device,
+        &ClTracer::compile_bvh(&device, flat.depth).unwrap(),
+        &flat,
+    )
+    .unwrap();
+    let mut brute_tracer = ClTracer::brute(
+        &device,
+        &ClTracer::compile_brute(&device).unwrap(),
+        &brute.triangles,
+    )
+    .unwrap();
+    for any_hit in [false, true] {
+        let from_bvh = bvh_tracer.trace_rays(&rays, t_max, any_hit).unwrap();
+        let from_brute = brute_tracer.trace_rays(&rays, t_max, any_hit).unwrap();
+        let mut hits = 0;
+        for (i, ray) in rays.iter().enumerate() {
+            let expected = brute.trace(ray, t_max, false);
+            for (what, got) in [("cl-bvh", from_bvh[i]), ("cl-brute", from_brute[i])] {
+                match expected {
+                    None => assert!(
+                        got.is_miss(),
+                        "{what}, any_hit {any_hit}, ray {i}: hit {got:?} where the host sees nothing"
+                    ),
+                    Some((prim, t)) if !any_hit => {
+                        let distance = t * ray.dir.length();
+                        assert_eq!(got.prim, prim as u32, "{what}, ray {i}");
+                        assert!(
+                            (got.t - distance).abs() <= 1e-5 * distance,
+                            "{what}, ray {i}: {} vs {distance}",
+                            got.t
+                        );
+                    }
+                    Some(_) => {
+                        // Any hit will do, as long as it is a real one before t_max.
+                        let tri = &brute.triangles[got.prim as usize];
+                        let t = hit_distance(ray, tri).unwrap_or_else(|| {
+                            panic!("{what}, ray {i}: reported triangle {} is not hit", got.prim)
+                        });
+                        assert!(
+                            t <= t_max * ray.dir.length() * (1.0 + 1e-5),
+                            "{what}, ray {i}: hit beyond t_max"
+                        );
+                    }
+                }
+            }
+            hits += expected.is_some() as usize;
+            assert_eq!(
+                flat.occluded(ray, t_max),
+                expected.is_some(),
+                "host BVH any-hit, ray {i}"
+            );
+        }
+        assert!(
+            hits > 200 && hits < 3800,
+            "the rays should both hit and miss ({hits} hits)"
+        );
+    }
+}

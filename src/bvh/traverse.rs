@@ -1,5 +1,5 @@
-//! The host's BVH traversal over the flat device layout, mirroring `trace_bvh` in
-//! cl/bvh.cl step for step: a per-ray stack, nearer child first, boxes farther than the
+//! The host's BVH traversal over the flat device layout, mirroring `trace` in
+//! cl/cltrace.h step for step: a per-ray stack, nearer child first, boxes farther than the
 //! closest hit so far skipped.
 
 use super::MAX_DEPTH;
@@ -58,7 +58,7 @@ impl ClosestHit for FlatBvh {
         &self.triangles
     }
 
-    fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<(usize, f32)> {
+    fn trace(&self, ray: &Ray, t_max: f32, any_hit: bool) -> Option<(usize, f32)> {
         let tri_ray = WatertightRay::new(ray);
         let box_ray = RayBox::new(ray);
         let mut t = t_max;
@@ -75,6 +75,9 @@ impl ClosestHit for FlatBvh {
                     if let Some(h) = tri_ray.intersect_stored(&self.triangles[i], t) {
                         t = h;
                         best = Some((i, h));
+                        if any_hit {
+                            return best;
+                        }
                     }
                 }
             } else {

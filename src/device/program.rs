@@ -13,10 +13,9 @@ const INCLUDE_LINE: &str = "#include \"cltrace.h\"";
 /// A kernel file of `cl/`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum KernelSource {
-    /// `brute.cl`: every ray against every triangle.
-    Brute,
-    /// `bvh.cl`: BVH traversal with a per-work-item stack (needs `STACK_SIZE`).
-    Bvh,
+    /// `trace.cl`: the closest-hit kernels, against the BVH when built with `STACK_SIZE`
+    /// (its depth), else against every triangle.
+    Trace,
     /// `probe.cl`: reports the shared structs' layout.
     Probe,
 }
@@ -24,16 +23,14 @@ pub enum KernelSource {
 impl KernelSource {
     pub fn file_name(self) -> &'static str {
         match self {
-            KernelSource::Brute => "brute.cl",
-            KernelSource::Bvh => "bvh.cl",
+            KernelSource::Trace => "trace.cl",
             KernelSource::Probe => "probe.cl",
         }
     }
 
     fn text(self) -> &'static str {
         match self {
-            KernelSource::Brute => include_str!("../../cl/brute.cl"),
-            KernelSource::Bvh => include_str!("../../cl/bvh.cl"),
+            KernelSource::Trace => include_str!("../../cl/trace.cl"),
             KernelSource::Probe => include_str!("../../cl/probe.cl"),
         }
     }
@@ -109,7 +106,7 @@ mod tests {
 
     #[test]
     fn header_is_spliced_into_every_kernel() {
-        for k in [KernelSource::Brute, KernelSource::Bvh, KernelSource::Probe] {
+        for k in [KernelSource::Trace, KernelSource::Probe] {
             let s = k.source();
             assert!(s.contains("typedef struct"), "{}", k.file_name());
             assert!(!s.contains(INCLUDE_LINE), "{}", k.file_name());

@@ -11,14 +11,25 @@ use crate::geometry::Ray;
 use crate::layout::Triangle;
 use crate::triangle::WatertightRay;
 
-/// Anything that finds a ray's closest hit among its triangles.
+/// Anything that finds where rays hit its triangles: the host's side of `trace` in
+/// cl/cltrace.h.
 pub trait ClosestHit: Sync {
     /// The triangles hits refer to, in the tracer's own order.
     fn triangles(&self) -> &[Triangle];
 
-    /// The closest hit along `ray` with `t` in `(0, t_max)`: the index into
-    /// [`ClosestHit::triangles`] and the ray parameter.
-    fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<(usize, f32)>;
+    /// The closest hit along `ray` with `t` in `(0, t_max)` or, with `any_hit`, the first
+    /// hit found there: the index into [`ClosestHit::triangles`] and the ray parameter.
+    fn trace(&self, ray: &Ray, t_max: f32, any_hit: bool) -> Option<(usize, f32)>;
+
+    /// The closest hit along `ray` in `(0, t_max)`.
+    fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<(usize, f32)> {
+        self.trace(ray, t_max, false)
+    }
+
+    /// Whether anything lies along `ray` in `(0, t_max)`.
+    fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        self.trace(ray, t_max, true).is_some()
+    }
 }
 
 /// Every ray against every triangle, the first in order winning a tie.
@@ -31,7 +42,7 @@ impl ClosestHit for BruteForce {
         &self.triangles
     }
 
-    fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<(usize, f32)> {
+    fn trace(&self, ray: &Ray, t_max: f32, any_hit: bool) -> Option<(usize, f32)> {
         let wray = WatertightRay::new(ray);
         let mut best = None;
         let mut t = t_max;
@@ -39,6 +50,9 @@ impl ClosestHit for BruteForce {
             if let Some(h) = wray.intersect_stored(tri, t) {
                 t = h;
                 best = Some((i, h));
+                if any_hit {
+                    break;
+                }
             }
         }
         best

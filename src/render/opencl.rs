@@ -1,4 +1,4 @@
-//! The OpenCL renderer: uploads the scene, launches a tracing kernel over bands of rows
+//! The OpenCL renderer: uploads the scene, launches the tracing kernels over bands of rows
 //! (each launch bounded in time, the band height adapted from the launches before), and
 //! reads each band back from pitched device images.
 
@@ -12,6 +12,7 @@ use super::{Frame, Hit, ShadeParams};
 use crate::camera::Pinhole;
 use crate::device::{ClDevice, KernelSource, PitchedBuffer};
 use crate::error::{Error, Result};
+use crate::geometry::Ray;
 use crate::layout::{BvhNode, FlatBvh, Triangle};
 
 /// Default bound on one kernel launch, in milliseconds of device time.
@@ -27,18 +28,28 @@ pub struct DeviceTimes {
     pub launches: u32,
 }
 
-/// A compiled kernel with its scene uploaded, ready to render frames.
+/// The scene on the device: what every kernel's leading `SCENE_PARAMS` receive.
+enum Scene {
+    /// Every triangle, in file order.
+    Triangles {
+        triangles: ocl::Buffer<Triangle>,
+        count: u32,
+    },
+    /// The flat BVH and its error flags (bit 0: a traversal stack overflowed).
+    Bvh {
+        nodes: ocl::Buffer<BvhNode>,
+        triangles: ocl::Buffer<Triangle>,
+        status: ocl::Buffer<u32>,
+    },
+}
+
+/// The kernels compiled for one device with their scene uploaded, ready to trace.
 pub struct ClTracer<'d> {
     device: &'d ClDevice,
-    kernel: ocl::Kernel,
-    /// Index of the first camera argument; the scene's buffers come before it.
-    first_camera_arg: u32,
+    program: ocl::Program,
+    scene: Scene,
+    primary: ocl::Kernel,
     bands: BandPlanner,
-    /// The scene on the device, kept alive as long as the kernel that reads it.
-    _triangles: ocl::Buffer<Triangle>,
-    _nodes: Option<ocl::Buffer<BvhNode>>,
-    /// The BVH kernel's error flags; bit 0: a traversal stack overflowed.
-    status: Option<ocl::Buffer<u32>>,
 }
 
 /// Sizes bands of rows so that each launch takes about [`LAUNCH_TARGET_MS`].
@@ -69,81 +80,88 @@ impl BandPlanner {
 }
 
 impl<'d> ClTracer<'d> {
-    /// Compiles the brute-force kernel.
+    /// Compiles the kernels against a plain triangle list (brute force).
     pub fn compile_brute(device: &'d ClDevice) -> Result<ocl::Program> {
-        device.build(KernelSource::Brute, &[])
+        device.build(KernelSource::Trace, &[])
     }
 
-    /// Uploads the triangles (in file order) for the brute-force kernel.
+    /// Compiles the kernels against the BVH, with a traversal stack as deep as the tree.
+    pub fn compile_bvh(device: &'d ClDevice, depth: u32) -> Result<ocl::Program> {
+        device.build(
+            KernelSource::Trace,
+            &[("STACK_SIZE", depth.max(1).to_string())],
+        )
+    }
+
+    /// Uploads the triangles (in file order) for the brute-force kernels.
     pub fn brute(
         device: &'d ClDevice,
         program: &ocl::Program,
         triangles: &[Triangle],
     ) -> Result<Self> {
-        let tris = upload(device, triangles, "uploading triangles")?;
-        let kernel = ocl::Kernel::builder()
-            .program(program)
-            .name("trace_brute")
-            .queue(device.queue.clone())
-            .arg(&tris)
-            .arg(triangles.len() as u32)
-            .args_for_frame()
-            .build()
-            .map_err(|e| device.error("creating the trace_brute kernel", e))?;
-        Ok(ClTracer {
+        let scene = Scene::Triangles {
+            triangles: upload(device, triangles, "uploading triangles")?,
+            count: triangles.len() as u32,
+        };
+        // About 16 million ray/triangle tests in the first launch.
+        Self::new(
             device,
-            kernel,
-            first_camera_arg: 2,
-            bands: BandPlanner {
-                rate: None,
-                // About 16 million ray/triangle tests in the first launch.
-                first_band_pixels: (1usize << 24) / triangles.len().max(1),
-            },
-            _triangles: tris,
-            _nodes: None,
-            status: None,
-        })
-    }
-
-    /// Compiles the BVH kernel with a traversal stack as deep as the tree.
-    pub fn compile_bvh(device: &'d ClDevice, depth: u32) -> Result<ocl::Program> {
-        device.build(
-            KernelSource::Bvh,
-            &[("STACK_SIZE", depth.max(1).to_string())],
+            program,
+            scene,
+            (1usize << 24) / triangles.len().max(1),
         )
     }
 
-    /// Uploads the flat BVH for the BVH kernel.
+    /// Uploads the flat BVH for the BVH kernels.
     pub fn bvh(device: &'d ClDevice, program: &ocl::Program, bvh: &FlatBvh) -> Result<Self> {
-        let nodes = upload(device, &bvh.nodes, "uploading BVH nodes")?;
-        let tris = upload(device, &bvh.triangles, "uploading triangles")?;
         let status = ocl::Buffer::<u32>::builder()
             .queue(device.queue.clone())
             .flags(ocl::flags::MEM_READ_WRITE)
             .len(1)
             .build()
             .map_err(|e| device.error("allocating the status flag", e))?;
-        let kernel = ocl::Kernel::builder()
-            .program(program)
-            .name("trace_bvh")
-            .queue(device.queue.clone())
-            .arg(&nodes)
-            .arg(&tris)
-            .arg(&status)
-            .args_for_frame()
+        let scene = Scene::Bvh {
+            nodes: upload(device, &bvh.nodes, "uploading BVH nodes")?,
+            triangles: upload(device, &bvh.triangles, "uploading triangles")?,
+            status,
+        };
+        Self::new(device, program, scene, 1 << 16)
+    }
+
+    fn new(
+        device: &'d ClDevice,
+        program: &ocl::Program,
+        scene: Scene,
+        first_band_pixels: usize,
+    ) -> Result<Self> {
+        let mut builder = kernel_builder(device, program, "trace_primary", &scene);
+        builder
+            .arg(Float4::zero())
+            .arg(Float4::zero())
+            .arg(Float4::zero())
+            .arg(Float4::zero())
+            .arg(0u32)
+            .arg(0u32)
+            .arg(0u32)
+            .arg(0i32)
+            .arg(0f32)
+            .arg(0f32)
+            .arg(None::<&ocl::Buffer<Hit>>)
+            .arg(0u32)
+            .arg(None::<&ocl::Buffer<u32>>)
+            .arg(0u32);
+        let primary = builder
             .build()
-            .map_err(|e| device.error("creating the trace_bvh kernel", e))?;
+            .map_err(|e| device.error("creating the trace_primary kernel", e))?;
         Ok(ClTracer {
             device,
-            kernel,
-            first_camera_arg: 3,
+            program: program.clone(),
+            scene,
+            primary,
             bands: BandPlanner {
                 rate: None,
-                first_band_pixels: 1 << 16,
+                first_band_pixels,
             },
-            _triangles: tris,
-            _nodes: Some(nodes),
-            status: Some(status),
         })
     }
 
@@ -162,13 +180,12 @@ impl<'d> ClTracer<'d> {
         let hits = PitchedBuffer::<Hit>::new(device, w, band_capacity)?;
         let colors = PitchedBuffer::<u32>::new(device, w, band_capacity)?;
 
-        let k = &self.kernel;
-        let bands = &mut self.bands;
+        let k = &self.primary;
         let set = |i: u32, e: std::result::Result<(), ocl::Error>| {
             e.map_err(|e| device.error(&format!("setting kernel argument {i}"), e))
         };
         let f4 = |v: [f32; 4]| Float4::new(v[0], v[1], v[2], v[3]);
-        let a = self.first_camera_arg;
+        let a = self.scene.arg_count();
         set(a, k.set_arg(a, f4(camera.eye)))?;
         set(a + 1, k.set_arg(a + 1, f4(camera.p0)))?;
         set(a + 2, k.set_arg(a + 2, f4(camera.du)))?;
@@ -181,20 +198,15 @@ impl<'d> ClTracer<'d> {
         set(a + 11, k.set_arg(a + 11, hits.pitch as u32))?;
         set(a + 12, k.set_arg(a + 12, &colors.buffer))?;
         set(a + 13, k.set_arg(a + 13, colors.pitch as u32))?;
+        self.scene.clear_status(device)?;
 
-        if let Some(status) = &self.status {
-            status
-                .write(&[0u32][..])
-                .enq()
-                .map_err(|e| device.error("clearing the status flag", e))?;
-        }
         let local = local_size(device);
         let mut frame = Frame::new(width, height);
         let mut times = DeviceTimes::default();
         let mut bar: Option<ProgressBar> = None;
         let mut y0 = 0usize;
         while y0 < h {
-            let rows = bands.next_rows(w, h - y0).min(band_capacity);
+            let rows = self.bands.next_rows(w, h - y0).min(band_capacity);
             // Work-items past the band (the global size is rounded up) return at once.
             set(a + 5, k.set_arg(a + 5, y0 as u32))?;
             set(a + 6, k.set_arg(a + 6, (y0 + rows) as u32))?;
@@ -202,24 +214,16 @@ impl<'d> ClTracer<'d> {
                 w.div_ceil(local[0]) * local[0],
                 rows.div_ceil(local[1]) * local[1],
             ];
-            let mut event = ocl::Event::empty();
-            unsafe {
+            let ms = launch(
+                device,
                 k.cmd()
                     .global_work_offset([0, y0])
                     .global_work_size(global)
-                    .local_work_size(local)
-                    .enew(&mut event)
-                    .enq()
-                    .map_err(|e| device.error("launching the kernel", e))?;
-            }
-            event
-                .wait_for()
-                .map_err(|e| device.error("running the kernel", e.into()))?;
-            let ms = event_ms(&event)
-                .map_err(|e| device.error("reading the kernel's profiling times", e))?;
+                    .local_work_size(local),
+            )?;
             times.kernel_ms += ms;
             times.launches += 1;
-            bands.learn(rows * w, ms);
+            self.bands.learn(rows * w, ms);
 
             let start = Instant::now();
             hits.read_rows(device, rows, &mut frame.hits[y0 * w..])?;
@@ -229,7 +233,8 @@ impl<'d> ClTracer<'d> {
             y0 += rows;
             if progress && bar.is_none() && y0 < h {
                 // Show a bar only when the remaining work looks longer than a second.
-                let remaining_ms = (h - y0) as f64 * w as f64 / bands.rate.unwrap_or(f64::INFINITY);
+                let remaining_ms =
+                    (h - y0) as f64 * w as f64 / self.bands.rate.unwrap_or(f64::INFINITY);
                 if remaining_ms > 1000.0 {
                     let b = ProgressBar::new(h as u64).with_style(
                         ProgressStyle::with_template(
@@ -248,7 +253,77 @@ impl<'d> ClTracer<'d> {
         if let Some(b) = bar {
             b.finish_and_clear();
         }
-        if let Some(status) = &self.status {
+        self.scene.check_status(device)?;
+        Ok((frame, times))
+    }
+
+    /// Traces arbitrary rays: the closest hit of each in `(0, t_max)`, or with `any_hit`
+    /// any hit there. Hits name triangles in file order; `t` is the distance along the ray.
+    pub fn trace_rays(&mut self, rays: &[Ray], t_max: f32, any_hit: bool) -> Result<Vec<Hit>> {
+        let device = self.device;
+        if rays.is_empty() {
+            return Ok(Vec::new());
+        }
+        let packed: Vec<Float4> = rays
+            .iter()
+            .flat_map(|r| {
+                [
+                    Float4::new(r.origin.x, r.origin.y, r.origin.z, t_max),
+                    Float4::new(r.dir.x, r.dir.y, r.dir.z, 0.0),
+                ]
+            })
+            .collect();
+        let input = upload(device, &packed, "uploading rays")?;
+        let output = ocl::Buffer::<Hit>::builder()
+            .queue(device.queue.clone())
+            .flags(ocl::flags::MEM_WRITE_ONLY)
+            .len(rays.len())
+            .build()
+            .map_err(|e| device.error("allocating the hit buffer", e))?;
+        let mut builder = kernel_builder(device, &self.program, "trace_rays", &self.scene);
+        builder
+            .arg(&input)
+            .arg(rays.len() as u32)
+            .arg(any_hit as i32)
+            .arg(&output)
+            .global_work_size(rays.len());
+        let kernel = builder
+            .build()
+            .map_err(|e| device.error("creating the trace_rays kernel", e))?;
+        self.scene.clear_status(device)?;
+        launch(device, kernel.cmd())?;
+        let mut hits = vec![Hit::NONE; rays.len()];
+        output
+            .read(&mut hits)
+            .enq()
+            .map_err(|e| device.error("reading hits back", e))?;
+        self.scene.check_status(device)?;
+        Ok(hits)
+    }
+}
+
+impl Scene {
+    /// How many kernel arguments the scene takes (they come first).
+    fn arg_count(&self) -> u32 {
+        match self {
+            Scene::Triangles { .. } => 2,
+            Scene::Bvh { .. } => 3,
+        }
+    }
+
+    fn clear_status(&self, device: &ClDevice) -> Result<()> {
+        if let Scene::Bvh { status, .. } = self {
+            status
+                .write(&[0u32][..])
+                .enq()
+                .map_err(|e| device.error("clearing the status flag", e))?;
+        }
+        Ok(())
+    }
+
+    /// Refuses the result of kernels that raised an error flag.
+    fn check_status(&self, device: &ClDevice) -> Result<()> {
+        if let Scene::Bvh { status, .. } = self {
             let mut flags = [0u32];
             status
                 .read(&mut flags[..])
@@ -261,33 +336,49 @@ impl<'d> ClTracer<'d> {
                 )));
             }
         }
-        Ok((frame, times))
+        Ok(())
     }
 }
 
-/// Sets the kernel arguments every tracing kernel takes after its scene buffers, with
-/// placeholders that `render` fills in.
-trait FrameArgs {
-    fn args_for_frame(&mut self) -> &mut Self;
+/// A kernel builder with the scene's arguments in place.
+fn kernel_builder<'b>(
+    device: &ClDevice,
+    program: &'b ocl::Program,
+    name: &str,
+    scene: &'b Scene,
+) -> ocl::builders::KernelBuilder<'b> {
+    let mut builder = ocl::Kernel::builder();
+    builder
+        .program(program)
+        .name(name)
+        .queue(device.queue.clone());
+    match scene {
+        Scene::Triangles { triangles, count } => {
+            builder.arg(triangles).arg(*count);
+        }
+        Scene::Bvh {
+            nodes,
+            triangles,
+            status,
+        } => {
+            builder.arg(nodes).arg(triangles).arg(status);
+        }
+    }
+    builder
 }
 
-impl FrameArgs for ocl::builders::KernelBuilder<'_> {
-    fn args_for_frame(&mut self) -> &mut Self {
-        self.arg(Float4::zero())
-            .arg(Float4::zero())
-            .arg(Float4::zero())
-            .arg(Float4::zero())
-            .arg(0u32)
-            .arg(0u32)
-            .arg(0u32)
-            .arg(0i32)
-            .arg(0f32)
-            .arg(0f32)
-            .arg(None::<&ocl::Buffer<Hit>>)
-            .arg(0u32)
-            .arg(None::<&ocl::Buffer<u32>>)
-            .arg(0u32)
+/// Enqueues a kernel, waits for it, and returns its device time in milliseconds.
+fn launch(device: &ClDevice, cmd: ocl::builders::KernelCmd) -> Result<f64> {
+    let mut event = ocl::Event::empty();
+    unsafe {
+        cmd.enew(&mut event)
+            .enq()
+            .map_err(|e| device.error("launching the kernel", e))?;
     }
+    event
+        .wait_for()
+        .map_err(|e| device.error("running the kernel", e.into()))?;
+    event_ms(&event).map_err(|e| device.error("reading the kernel's profiling times", e))
 }
 
 fn upload<T: ocl::OclPrm>(device: &ClDevice, data: &[T], doing: &str) -> Result<ocl::Buffer<T>> {

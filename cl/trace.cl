@@ -1,0 +1,36 @@
+/* trace.cl: the closest-hit kernels, compiled once against the BVH (cl-bvh, with
+ * STACK_SIZE defined) and once against the plain triangle list (cl-brute): the thesis's
+ * GPU brute force and GPU SAH-BVH stages from one source. */
+#include "cltrace.h"
+
+/* One primary ray per pixel of the band [row0, row_end), written to pitched images whose
+ * row 0 is image row row0. */
+__kernel void trace_primary(SCENE_PARAMS,
+                            float4 eye, float4 p0, float4 du, float4 dv,
+                            uint width, uint row0, uint row_end,
+                            int shade, float near, float far,
+                            __global Hit* hits, uint hit_pitch,
+                            __global uint* colors, uint color_pitch) {
+    uint x = get_global_id(0), y = get_global_id(1);
+    if (x >= width || y < row0 || y >= row_end) return;
+    float3 dir = camera_ray(p0, du, dv, x, y);
+    float t;
+    uint best = trace(SCENE, eye.xyz, dir, INFINITY, false, &t);
+    store_pixel(hits, hit_pitch, colors, color_pitch, x, y - row0, best, t, dir, tris, shade, near, far);
+}
+
+/* Arbitrary rays: origin and t_max in rays[2i] (xyz, w), direction in rays[2i + 1]. With
+ * any_hit set, any hit before t_max is reported, not necessarily the closest. */
+__kernel void trace_rays(SCENE_PARAMS, __global const float4* rays, uint count, int any_hit,
+                         __global Hit* hits) {
+    uint i = get_global_id(0);
+    if (i >= count) return;
+    float4 o = rays[2 * i];
+    float3 dir = rays[2 * i + 1].xyz;
+    float t;
+    uint best = trace(SCENE, o.xyz, dir, o.w, any_hit != 0, &t);
+    Hit h;
+    h.prim = best == MISS ? MISS : tris[best].prim;
+    h.t = best == MISS ? INFINITY : t * length3(dir);
+    hits[i] = h;
+}
