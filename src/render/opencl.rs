@@ -29,18 +29,17 @@ pub struct DeviceTimes {
 }
 
 /// The scene on the device: what every kernel's leading `SCENE_PARAMS` receive.
-enum Scene {
-    /// Every triangle, in file order.
-    Triangles {
-        triangles: ocl::Buffer<Triangle>,
-        count: u32,
-    },
-    /// The flat BVH and its error flags (bit 0: a traversal stack overflowed).
-    Bvh {
-        nodes: ocl::Buffer<BvhNode>,
-        triangles: ocl::Buffer<Triangle>,
-        status: ocl::Buffer<u32>,
-    },
+struct Scene {
+    /// Every triangle: in file order for brute force, in leaf order under a BVH.
+    triangles: ocl::Buffer<Triangle>,
+    count: u32,
+    bvh: Option<DeviceBvh>,
+}
+
+/// The flat BVH's nodes and the kernels' error flags (bit 0: a stack overflowed).
+struct DeviceBvh {
+    nodes: ocl::Buffer<BvhNode>,
+    status: ocl::Buffer<u32>,
 }
 
 /// The kernels compiled for one device with their scene uploaded, ready to trace.
@@ -99,9 +98,10 @@ impl<'d> ClTracer<'d> {
         program: &ocl::Program,
         triangles: &[Triangle],
     ) -> Result<Self> {
-        let scene = Scene::Triangles {
+        let scene = Scene {
             triangles: upload(device, triangles, "uploading triangles")?,
             count: triangles.len() as u32,
+            bvh: None,
         };
         // About 16 million ray/triangle tests in the first launch.
         Self::new(
@@ -120,10 +120,13 @@ impl<'d> ClTracer<'d> {
             .len(1)
             .build()
             .map_err(|e| device.error("allocating the status flag", e))?;
-        let scene = Scene::Bvh {
-            nodes: upload(device, &bvh.nodes, "uploading BVH nodes")?,
+        let scene = Scene {
             triangles: upload(device, &bvh.triangles, "uploading triangles")?,
-            status,
+            count: bvh.triangles.len() as u32,
+            bvh: Some(DeviceBvh {
+                nodes: upload(device, &bvh.nodes, "uploading BVH nodes")?,
+                status,
+            }),
         };
         Self::new(device, program, scene, 1 << 16)
     }
@@ -305,14 +308,11 @@ impl<'d> ClTracer<'d> {
 impl Scene {
     /// How many kernel arguments the scene takes (they come first).
     fn arg_count(&self) -> u32 {
-        match self {
-            Scene::Triangles { .. } => 2,
-            Scene::Bvh { .. } => 3,
-        }
+        if self.bvh.is_some() { 3 } else { 2 }
     }
 
     fn clear_status(&self, device: &ClDevice) -> Result<()> {
-        if let Scene::Bvh { status, .. } = self {
+        if let Some(DeviceBvh { status, .. }) = &self.bvh {
             status
                 .write(&[0u32][..])
                 .enq()
@@ -323,7 +323,7 @@ impl Scene {
 
     /// Refuses the result of kernels that raised an error flag.
     fn check_status(&self, device: &ClDevice) -> Result<()> {
-        if let Scene::Bvh { status, .. } = self {
+        if let Some(DeviceBvh { status, .. }) = &self.bvh {
             let mut flags = [0u32];
             status
                 .read(&mut flags[..])
@@ -352,18 +352,13 @@ fn kernel_builder<'b>(
         .program(program)
         .name(name)
         .queue(device.queue.clone());
-    match scene {
-        Scene::Triangles { triangles, count } => {
-            builder.arg(triangles).arg(*count);
-        }
-        Scene::Bvh {
-            nodes,
-            triangles,
-            status,
-        } => {
-            builder.arg(nodes).arg(triangles).arg(status);
-        }
-    }
+    match &scene.bvh {
+        None => builder.arg(&scene.triangles).arg(scene.count),
+        Some(bvh) => builder
+            .arg(&bvh.nodes)
+            .arg(&scene.triangles)
+            .arg(&bvh.status),
+    };
     builder
 }
 
