@@ -15,12 +15,19 @@
 /* ---- device structs ------------------------------------------------------------------ */
 
 /* A triangle as the intersector reads it: three corners, each padded to 16 bytes so that a
- * corner is one vector load. `prim` is the triangle's index in file order. */
+ * corner is one vector load. `prim` is the triangle's index in file order, `material` its
+ * index into the Material array. */
 typedef struct {
     float v0[3]; uint prim;
-    float v1[3]; uint pad1;
-    float v2[3]; uint pad2;
+    float v1[3]; uint material;
+    float v2[3]; uint pad;
 } Triangle;
+
+/* A diffuse material: albedo and emitted radiance. */
+typedef struct {
+    float albedo[3]; float pad0;
+    float emission[3]; float pad1;
+} Material;
 
 /* A 32-byte BVH node, depth-first order. An inner node holds its children's indices; a
  * leaf holds its first triangle and, in `right_or_count`, LEAF_FLAG | triangle count. */
@@ -28,6 +35,28 @@ typedef struct {
     float min[3]; uint left_or_first;
     float max[3]; uint right_or_count;
 } BvhNode;
+
+/* The Aila-Laine layout: a 64-byte node holding both children's boxes. refs: left child,
+ * right child, left count, right count; a child with count 0 is an inner node (its index),
+ * with count > 0 a leaf of that many triangles from its index. */
+typedef struct {
+    float left_xy[4];   /* min.x, max.x, min.y, max.y */
+    float right_xy[4];
+    float z[4];         /* left min.z, max.z, right min.z, max.z */
+    uint refs[4];
+} Bvh64Node;
+
+/* Wide nodes: the children's boxes plane by plane, then their references (count 0: inner
+ * node; count > 0: leaf; EMPTY_SLOT: unused). */
+#define EMPTY_SLOT 0xFFFFFFFFu
+typedef struct {
+    float min_x[4], max_x[4], min_y[4], max_y[4], min_z[4], max_z[4];
+    uint child[4], count[4];
+} Wide4Node;
+typedef struct {
+    float min_x[8], max_x[8], min_y[8], max_y[8], min_z[8], max_z[8];
+    uint child[8], count[8];
+} Wide8Node;
 
 /* One pixel's closest hit: the triangle's index in file order (MISS for none) and the
  * distance from the eye along the ray (+inf for a miss). */
@@ -105,12 +134,11 @@ inline float3 load3(const __global float* p) { return (float3)(p[0], p[1], p[2])
  * touches: 1 + 2 gamma(3) (Ize 2013), exactly 1 + 3 ulp in float. */
 #define ROBUST_EXIT (1.0f + 3.0f * FLT_EPSILON)
 
-/* 1 / dir with zero components taken as +-1e-30: every slab product stays finite. */
+/* 1 / dir per component: a zero component gives an infinite inverse. Where the origin lies
+ * in that slab's plane, 0 * inf makes the slab's distances NaN, which fmin and fmax skip, so
+ * a ray lying in a box face's plane counts as inside the slab (src/bvh/traverse.rs). */
 inline float3 safe_inverse(float3 d) {
-    float3 s = (float3)(fabs(d.x) < 1e-30f ? copysign(1e-30f, d.x) : d.x,
-                        fabs(d.y) < 1e-30f ? copysign(1e-30f, d.y) : d.y,
-                        fabs(d.z) < 1e-30f ? copysign(1e-30f, d.z) : d.z);
-    return (float3)(1.0f / s.x, 1.0f / s.y, 1.0f / s.z);
+    return (float3)(1.0f / d.x, 1.0f / d.y, 1.0f / d.z);
 }
 
 inline float intersect_stored(const WatertightRay* r, const __global Triangle* tri, float t_max) {
@@ -125,19 +153,79 @@ inline float intersect_stored(const WatertightRay* r, const __global Triangle* t
 
 #define STATUS_STACK_OVERFLOW 1u
 
-#ifdef STACK_SIZE
+/* LAYOUT selects the node format of a BVH program: 32 (the thesis's node, the default),
+ * 64 (Aila-Laine), 4 or 8 (wide). */
+#if defined(STACK_SIZE) && !defined(LAYOUT)
+#define LAYOUT 32
+#endif
 
-#define SCENE_PARAMS __global const BvhNode* nodes, __global const Triangle* tris, __global uint* status
+#ifdef LAYOUT
+#if LAYOUT == 32
+#define NODE BvhNode
+#elif LAYOUT == 64
+#define NODE Bvh64Node
+#elif LAYOUT == 4
+#define NODE Wide4Node
+#elif LAYOUT == 8
+#define NODE Wide8Node
+#else
+#error "LAYOUT must be 32, 64, 4 or 8"
+#endif
+#ifndef STACK_SIZE
+#error "a BVH program needs STACK_SIZE"
+#endif
+#define SCENE_PARAMS __global const NODE* nodes, __global const Triangle* tris, __global uint* status
 #define SCENE nodes, tris, status
+#endif
+
+/* The inverse used for near planes: where a subnormal (or zero) direction component made
+ * the inverse infinite, +-FLT_MAX, an entry no later than the true one (the far planes keep
+ * the infinity, an exit no earlier): both err towards visiting the box. */
+inline float3 near_inverse(float3 inv) {
+    return select(inv, copysign((float3)(FLT_MAX), inv), isinf(inv));
+}
+
+/* Entry distance into the box [lo, hi] if the ray meets it before t_max, else -1: the
+ * robust slab test of src/bvh/traverse.rs. */
+inline float box_entry(float3 lo, float3 hi, float3 org, float3 inv, float t_max) {
+    /* Each slab's near and far planes are picked by the inverse's sign, not by comparing
+     * distances, so that a NaN never stands in for the wrong one; fmin and fmax skip NaNs. */
+    int3 back = signbit(inv);
+    float3 tn = (select(lo, hi, back) - org) * near_inverse(inv);
+    float3 tf = (select(hi, lo, back) - org) * inv;
+    float near = fmax(fmax(tn.x, tn.y), fmax(tn.z, 0.0f));
+    float far = fmin(fmin(fmin(tf.x, tf.y), tf.z) * ROBUST_EXIT, t_max);
+    return near <= far ? near : -1.0f;
+}
+
+/* Tests a leaf's triangles [first, first + count); true when any_hit may stop the ray. */
+#define TEST_LEAF(first, count)                                          \
+    for (uint i = (first), end_ = (first) + (count); i < end_; ++i) {    \
+        float h_ = intersect_stored(&ray, &tris[i], t);                  \
+        if (h_ >= 0.0f) {                                                \
+            t = h_;                                                      \
+            best = i;                                                    \
+            if (any_hit) { *t_hit = t; return best; }                    \
+        }                                                                \
+    }
+
+/* Pops the next stacked node still nearer than the closest hit into `node`, or leaves the
+ * traversal loop when none is left. */
+#define POP_OR_BREAK                                                     \
+    {                                                                    \
+        bool found_ = false;                                             \
+        while (sp > 0) {                                                 \
+            --sp;                                                        \
+            if (stack_entry[sp] <= t) { node = stack_node[sp]; found_ = true; break; } \
+        }                                                                \
+        if (!found_) break;                                              \
+    }
+
+#if defined(LAYOUT) && LAYOUT == 32
 
 /* Entry distance into `node`'s box if the ray meets it before t_max, else -1. */
 inline float hit_box(const __global BvhNode* node, float3 org, float3 inv, float t_max) {
-    float t0x = (node->min[0] - org.x) * inv.x, t1x = (node->max[0] - org.x) * inv.x;
-    float t0y = (node->min[1] - org.y) * inv.y, t1y = (node->max[1] - org.y) * inv.y;
-    float t0z = (node->min[2] - org.z) * inv.z, t1z = (node->max[2] - org.z) * inv.z;
-    float near = fmax(fmax(fmin(t0x, t1x), fmin(t0y, t1y)), fmax(fmin(t0z, t1z), 0.0f));
-    float far = fmin(fmin(fmin(fmax(t0x, t1x), fmax(t0y, t1y)), fmax(t0z, t1z)) * ROBUST_EXIT, t_max);
-    return near <= far ? near : -1.0f;
+    return box_entry(load3(node->min), load3(node->max), org, inv, t_max);
 }
 
 /* The triangle (index into tris) the ray (org, dir) hits first in (0, t_max), or with
@@ -202,6 +290,117 @@ inline uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hi
     return best;
 }
 
+#elif defined(LAYOUT) && LAYOUT == 64
+
+/* Aila-Laine traversal: one 64-byte fetch tests both children; leaf children are tested at
+ * once, inner ones visited nearer first. Same contract as the LAYOUT 32 trace. */
+inline uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
+    WatertightRay ray = watertight_ray(org, dir);
+    float3 inv = safe_inverse(dir);
+    float t = t_max;
+    uint best = MISS;
+    uint stack_node[STACK_SIZE];
+    float stack_entry[STACK_SIZE];
+    uint sp = 0;
+    uint node = 0;
+    for (;;) {
+        const __global float4* n = (const __global float4*)&nodes[node];
+        float4 lxy = n[0], rxy = n[1], z = n[2];
+        uint4 refs = as_uint4(n[3]);
+        float tl = box_entry((float3)(lxy.x, lxy.z, z.x), (float3)(lxy.y, lxy.w, z.y), org, inv, t);
+        float tr = box_entry((float3)(rxy.x, rxy.z, z.z), (float3)(rxy.y, rxy.w, z.w), org, inv, t);
+        bool hl = tl >= 0.0f, hr = tr >= 0.0f;
+        if (hl && refs.z != 0) { TEST_LEAF(refs.x, refs.z); hl = false; }
+        if (hr && refs.w != 0) { TEST_LEAF(refs.y, refs.w); hr = false; }
+        if (hl && hr) {
+            if (sp >= STACK_SIZE) { atomic_or(status, STATUS_STACK_OVERFLOW); return MISS; }
+            bool right_first = tr < tl;
+            stack_node[sp] = right_first ? refs.x : refs.y;
+            stack_entry[sp] = right_first ? tl : tr;
+            ++sp;
+            node = right_first ? refs.y : refs.x;
+        } else if (hl) {
+            node = refs.x;
+        } else if (hr) {
+            node = refs.y;
+        } else POP_OR_BREAK
+    }
+    *t_hit = t;
+    return best;
+}
+
+#elif defined(LAYOUT) && (LAYOUT == 4 || LAYOUT == 8)
+
+#if LAYOUT == 4
+#define WIDE_F float4
+#define WIDE_LOAD vload4
+#define WIDE_STORE vstore4
+#else
+#define WIDE_F float8
+#define WIDE_LOAD vload8
+#define WIDE_STORE vstore8
+#endif
+
+/* Wide traversal: each node's children boxes are tested plane by plane with one vector
+ * operation per plane; leaf children are tested at once, inner ones sorted by entry
+ * distance and the nearer visited first. Same contract as the LAYOUT 32 trace. */
+inline uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
+    WatertightRay ray = watertight_ray(org, dir);
+    float3 inv = safe_inverse(dir);
+    float3 inv_near = near_inverse(inv);
+    float t = t_max;
+    uint best = MISS;
+    uint stack_node[STACK_SIZE];
+    float stack_entry[STACK_SIZE];
+    uint sp = 0;
+    uint node = 0;
+    for (;;) {
+        const __global NODE* n = &nodes[node];
+        /* The near and far planes of each slab, picked by the ray's direction as in box_entry. */
+        const __global float* nx = signbit(inv.x) ? n->max_x : n->min_x;
+        const __global float* fx = signbit(inv.x) ? n->min_x : n->max_x;
+        const __global float* ny = signbit(inv.y) ? n->max_y : n->min_y;
+        const __global float* fy = signbit(inv.y) ? n->min_y : n->max_y;
+        const __global float* nz = signbit(inv.z) ? n->max_z : n->min_z;
+        const __global float* fz = signbit(inv.z) ? n->min_z : n->max_z;
+        WIDE_F tnx = (WIDE_LOAD(0, nx) - org.x) * inv_near.x, tfx = (WIDE_LOAD(0, fx) - org.x) * inv.x;
+        WIDE_F tny = (WIDE_LOAD(0, ny) - org.y) * inv_near.y, tfy = (WIDE_LOAD(0, fy) - org.y) * inv.y;
+        WIDE_F tnz = (WIDE_LOAD(0, nz) - org.z) * inv_near.z, tfz = (WIDE_LOAD(0, fz) - org.z) * inv.z;
+        WIDE_F near = fmax(fmax(tnx, tny), fmax(tnz, (WIDE_F)(0.0f)));
+        WIDE_F far = fmin(fmin(fmin(tfx, tfy), tfz) * ROBUST_EXIT, (WIDE_F)(t));
+        float near_a[LAYOUT], far_a[LAYOUT];
+        WIDE_STORE(near, 0, near_a);
+        WIDE_STORE(far, 0, far_a);
+        uint inner[LAYOUT];
+        float entry[LAYOUT];
+        uint m = 0;
+        for (uint k = 0; k < LAYOUT; ++k) {
+            uint count = n->count[k];
+            if (count == EMPTY_SLOT || !(near_a[k] <= far_a[k])) continue;
+            if (count != 0) {
+                TEST_LEAF(n->child[k], count);
+            } else {
+                /* Insertion into the list sorted by entry distance. */
+                uint j = m++;
+                while (j > 0 && entry[j - 1] > near_a[k]) { entry[j] = entry[j - 1]; inner[j] = inner[j - 1]; --j; }
+                entry[j] = near_a[k];
+                inner[j] = n->child[k];
+            }
+        }
+        if (m > 0 && entry[0] <= t) {
+            if (sp + m - 1 > STACK_SIZE) { atomic_or(status, STATUS_STACK_OVERFLOW); return MISS; }
+            for (uint j = m - 1; j > 0; --j) {
+                stack_node[sp] = inner[j];
+                stack_entry[sp] = entry[j];
+                ++sp;
+            }
+            node = inner[0];
+        } else POP_OR_BREAK
+    }
+    *t_hit = t;
+    return best;
+}
+
 #else
 
 #define SCENE_PARAMS __global const Triangle* tris, uint tri_count
@@ -228,6 +427,72 @@ inline uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hi
 #endif
 
 inline float length3(float3 d) { return sqrt(d.x * d.x + d.y * d.y + d.z * d.z); }
+
+/* ---- sampling (mirrors src/render/sampling.rs) ---------------------------------------- */
+
+/* Chris Wellons' lowbias32 integer hash. */
+inline uint hash_u32(uint x) {
+    x ^= x >> 16; x *= 0x7feb352du;
+    x ^= x >> 15; x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+
+/* A counter-based random stream: a number is a hash of (seed, pixel, sample, dimension). */
+inline uint sampler_key(uint seed, uint pixel, uint sample) {
+    return hash_u32(hash_u32(hash_u32(seed ^ 0x9e3779b9u) ^ pixel) ^ sample);
+}
+
+inline float sample_1d(uint key, uint dim) {
+    return (float)(hash_u32(key ^ (dim * 0x85ebca6bu)) >> 8) * (1.0f / 16777216.0f);
+}
+
+#define DIMS_PER_BOUNCE 8u
+inline uint bounce_dim(uint b) { return 2u + b * DIMS_PER_BOUNCE; }
+
+/* A cosine-weighted unit direction about the unit normal n (Duff et al. 2017 basis). */
+inline float3 cosine_direction(float3 n, float u1, float u2) {
+    float r = sqrt(u1);
+    float phi = 2.0f * M_PI_F * u2;
+    float x = r * cos(phi), y = r * sin(phi);
+    float z = sqrt(fmax(1.0f - u1, 0.0f));
+    float sign = n.z >= 0.0f ? 1.0f : -1.0f;
+    float a = -1.0f / (sign + n.z);
+    float b = n.x * n.y * a;
+    float3 t = (float3)(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    float3 bt = (float3)(b, sign + n.y * n.y * a, -n.y);
+    return t * x + bt * y + n * z;
+}
+
+/* A uniform point on the triangle (a, b, c). */
+inline float3 triangle_point(float3 a, float3 b, float3 c, float u1, float u2) {
+    float su = sqrt(u1);
+    float w0 = 1.0f - su, w1 = u2 * su;
+    return a * w0 + b * w1 + c * (1.0f - w0 - w1);
+}
+
+/* The ray direction of pixel (x, y) jittered within the pixel. */
+inline float3 jittered_ray(float4 p0, float4 du, float4 dv, uint x, uint y, uint key) {
+    float fx = (float)x + sample_1d(key, 0u);
+    float fy = (float)y + sample_1d(key, 1u);
+    return (float3)((p0.x + fx * du.x) + fy * dv.x,
+                    (p0.y + fx * du.y) + fy * dv.y,
+                    (p0.z + fx * du.z) + fy * dv.z);
+}
+
+/* The unit geometric normal of tri, turned to face dir's origin side. */
+inline float3 facing_normal(const __global Triangle* tri, float3 dir) {
+    float3 v0 = load3(tri->v0);
+    float3 n = normalize(cross(load3(tri->v1) - v0, load3(tri->v2) - v0));
+    return dot(n, dir) > 0.0f ? -n : n;
+}
+
+/* The sky of scenes without emitters: white at the horizon, blue overhead, grey below. */
+inline float3 sky(float3 d) {
+    float up = d.y / length(d);
+    return up >= 0.0f ? mix((float3)(1.0f), (float3)(0.45f, 0.65f, 1.0f), up)
+                      : mix((float3)(1.0f), (float3)(0.35f), -up);
+}
 
 /* ---- shading and output -------------------------------------------------------------- */
 

@@ -4,6 +4,7 @@
 //!
 //! - [`input`]: meshes from OBJ/PLY files or generators, and TOML scene files;
 //! - [`mesh`]: the triangle mesh every later stage reads;
+//! - [`material`]: diffuse albedo and emission per triangle;
 //! - [`camera`]: the pinhole camera and its exact pixel-to-ray arithmetic;
 //! - [`triangle`]: the watertight ray/triangle test (mirrored in `cl/cltrace.h`);
 //! - [`bvh`]: the SAH builders, tree statistics and the host traversal;
@@ -12,6 +13,7 @@
 //! - [`render`]: the CPU reference tracers and the OpenCL renderer;
 //! - [`output`]: images and hit records, written atomically;
 //! - [`bench`]: the cross-device benchmark table;
+//! - [`tune`]: the fastest layout and work-group per device, cached;
 //! - [`commands`]: the subcommands the `cltrace` binary runs.
 
 pub mod bench;
@@ -23,10 +25,12 @@ pub mod error;
 pub mod geometry;
 pub mod input;
 pub mod layout;
+pub mod material;
 pub mod mesh;
 pub mod output;
 pub mod render;
 pub mod report;
 pub mod triangle;
+pub mod tune;
 
 pub use error::{Error, Result};

@@ -9,6 +9,7 @@ use cltrace::bench::{self as benchmark, BenchRequest, RayKind};
 use cltrace::bvh::{BuildOptions, Builder};
 use cltrace::commands::{bvh, devices, render};
 use cltrace::input::scene_file::{CameraSettings, RenderSettings};
+use cltrace::layout::Layout;
 use cltrace::render::{Method, Shade};
 use cltrace::report::Verbosity;
 
@@ -18,6 +19,8 @@ Examples:
   cltrace render bunny.obj -o bunny.png --width 512 --height 512
   cltrace render scenes/room.toml --shade normal --method cpu-brute
   cltrace render dragon.obj.gz --device cpu --hits hits.bin
+  cltrace render scenes/room.toml --shade path --spp 256 -o room.exr
+  cltrace render bunny.obj --shade ao --ao-samples 32
   cltrace devices                                 list every OpenCL platform and device
 
 Exit status: 0 on success, 2 for bad input (mesh, scene, camera, options), 1 for device
@@ -37,8 +40,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render a scene file or a mesh to an image (one primary ray per pixel)
-    #[command(after_help = EXAMPLES)]
+    /// Render a scene file or a mesh to an image
+    #[command(after_help = EXAMPLES, allow_negative_numbers = true)]
     Render(RenderArgs),
     /// List every OpenCL platform and device, with the index `--device` accepts
     Devices,
@@ -46,9 +49,34 @@ enum Command {
     /// benchmark protocol of BENCHMARK.md) and print a Markdown table
     #[command(after_help = BENCH_EXAMPLES)]
     Bench(BenchArgs),
+    /// Find each OpenCL device's fastest BVH layout and work-group shape (primary and
+    /// diffuse rays at 1920x1080) and remember them in the tuning cache, which renders read
+    Tune(TuneArgs),
     /// Build a scene's BVH and print its statistics: nodes, leaves, depth, leaf sizes,
     /// SAH cost, build time and device bytes per triangle
     Bvh(BvhArgs),
+}
+
+#[derive(Args)]
+struct TuneArgs {
+    /// The scene to measure on [default: the built-in scene]
+    scene: Option<PathBuf>,
+
+    /// OpenCL devices: `all`, or comma-separated selectors
+    #[arg(long, default_value = "all")]
+    devices: String,
+
+    /// Timed frames per combination (after one warm-up frame)
+    #[arg(long, default_value_t = 3)]
+    repetitions: u32,
+
+    /// The cache file [default: CLTRACE_TUNE_CACHE, else ~/.cache/cltrace/tune.toml]
+    #[arg(long, value_name = "FILE")]
+    cache: Option<PathBuf>,
+
+    /// Print nothing but the table and errors
+    #[arg(short, long)]
+    quiet: bool,
 }
 
 const BENCH_EXAMPLES: &str = "\
@@ -80,12 +108,26 @@ struct BenchArgs {
     )]
     methods: Vec<Method>,
 
+    /// BVH node layouts to measure cl-bvh in, comma-separated
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "bin32,bin64,wide4,wide8"
+    )]
+    layouts: Vec<Layout>,
+
     /// OpenCL devices: `all`, or comma-separated selectors (`P:D`, `gpu`, `cpu`, part of a name)
     #[arg(long, default_value = "all")]
     devices: String,
 
     /// Ray kinds to measure, comma-separated
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "primary")]
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "primary,diffuse"
+    )]
     rays: Vec<RayKind>,
 
     /// Resolutions, comma-separated `WxH`
@@ -170,6 +212,11 @@ struct BuildArgs {
     /// Largest leaf, in triangles (1 to 255); the SAH decides below it
     #[arg(long, default_value_t = BuildOptions::default().max_leaf_size)]
     max_leaf_size: u32,
+
+    /// Optimize the built tree by node reinsertion for up to N rounds (0 to 1000; 0 is off):
+    /// a lower SAH cost for more build time; rounds stop early once one gains under 0.1%
+    #[arg(long, value_name = "N", default_value_t = BuildOptions::default().optimize_rounds)]
+    optimize: u32,
 }
 
 impl BuildArgs {
@@ -178,6 +225,7 @@ impl BuildArgs {
             builder: self.builder,
             bins: self.bins,
             max_leaf_size: self.max_leaf_size,
+            optimize_rounds: self.optimize,
             ..BuildOptions::default()
         }
     }
@@ -226,9 +274,42 @@ struct RenderArgs {
     #[arg(long, value_enum)]
     method: Option<Method>,
 
-    /// How hits are coloured [default: scene's, else lambert]
+    /// BVH node layout of cl-bvh [default: scene's, else bin32]
+    #[arg(long, value_enum)]
+    layout: Option<Layout>,
+
+    /// How hits are coloured [default: scene's, else lambert]; ao, shadow and path
+    /// accumulate samples (--spp) and trace secondary rays
     #[arg(long, value_enum)]
     shade: Option<Shade>,
+
+    /// Samples per pixel for ao, shadow and path, 1 to 65536 [default: scene's, else 16
+    /// for path, 4 for shadow, 1 for ao]; Ctrl-C stops early and writes what accumulated
+    #[arg(long)]
+    spp: Option<u32>,
+
+    /// Seed of the random numbers: the same command on the same device gives the same image
+    /// [default: scene's, else 0]
+    #[arg(long)]
+    seed: Option<u32>,
+
+    /// Ambient occlusion rays per sample, 1 to 1024 [default: scene's, else 16]
+    #[arg(long)]
+    ao_samples: Option<u32>,
+
+    /// How far ambient occlusion rays reach, in scene units [default: scene's, else a
+    /// quarter of the scene's bounding radius]
+    #[arg(long)]
+    ao_distance: Option<f32>,
+
+    /// Bounces of the path tracer, 0 to 1024 [default: scene's, else 8]
+    #[arg(long)]
+    max_bounces: Option<u32>,
+
+    /// The light of --shade shadow: `sun:x,y,z` (the direction towards it) or
+    /// `point:x,y,z` (its position) [default: scene's, else sun:-0.4,1,0.6]
+    #[arg(long, allow_hyphen_values = true)]
+    light: Option<String>,
 
     /// Also write the raw per-pixel hit records here (8 bytes a pixel: u32 triangle, f32 distance)
     #[arg(long, value_name = "FILE")]
@@ -236,6 +317,11 @@ struct RenderArgs {
 
     #[command(flatten)]
     build: BuildArgs,
+
+    /// If the OpenCL device fails (none found, kernel build, out of memory, lost), render on
+    /// the host instead of stopping with the error
+    #[arg(long, value_enum, value_name = "WHERE")]
+    fallback: Option<render::Fallback>,
 
     /// Print nothing but errors
     #[arg(short, long, conflicts_with = "verbose")]
@@ -260,11 +346,33 @@ fn parse_vec3(s: &str) -> Result<[f32; 3], String> {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        // Help and version go to stdout as usual; a mistake on the command line is one line
+        // on stderr and exit status 2, like any other bad input.
+        Err(e) if !e.use_stderr() => e.exit(),
+        Err(e) => {
+            let text = e.render().to_string();
+            let first = text
+                .lines()
+                .find(|l| !l.trim().is_empty())
+                .unwrap_or("error: invalid arguments");
+            eprintln!("{} (see --help)", first.trim_end());
+            return ExitCode::from(2);
+        }
+    };
+    // The first Ctrl-C asks a progressive render to stop and write what it has; a second
+    // one ends the process at once.
+    let _ = ctrlc::set_handler(|| {
+        if render::STOP.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+    });
     let result = match cli.command {
         Command::Render(args) => run_render(args),
         Command::Devices => devices::devices_table().map(|table| print!("{table}")),
         Command::Bench(args) => run_bench(args),
+        Command::Tune(args) => run_tune(args),
         Command::Bvh(args) => {
             bvh::bvh_report(args.scene.as_deref(), &args.build.options(), args.repeat)
                 .map(|report| print!("{report}"))
@@ -293,12 +401,20 @@ fn run_render(args: RenderArgs) -> cltrace::Result<()> {
         },
         render: RenderSettings {
             method: args.method,
+            layout: args.layout,
             shade: args.shade,
+            spp: args.spp,
+            seed: args.seed,
+            ao_samples: args.ao_samples,
+            ao_distance: args.ao_distance,
+            max_bounces: args.max_bounces,
+            light: args.light,
         },
         output: args.output,
         hits: args.hits,
         device: args.device,
         build: args.build.options(),
+        fallback: args.fallback,
         verbosity,
     };
     let outcome = render::run(&request)?;
@@ -323,6 +439,7 @@ fn run_bench(args: BenchArgs) -> cltrace::Result<()> {
         generated: Vec::new(),
         scene_folders: args.scene_folders,
         methods: args.methods,
+        layouts: args.layouts,
         devices: (!args.devices.trim().eq_ignore_ascii_case("all")).then(|| {
             args.devices
                 .split(',')
@@ -364,5 +481,71 @@ fn run_bench(args: BenchArgs) -> cltrace::Result<()> {
     if let Some(json) = &args.json {
         benchmark::write_json(&rows, json)?;
     }
+    Ok(())
+}
+
+fn run_tune(args: TuneArgs) -> cltrace::Result<()> {
+    use cltrace::device::{ClDevice, DeviceSelector, list_devices};
+    use cltrace::tune::{TuneCache, cache_path, tune_device};
+    let verbosity = Verbosity::from_flags(args.quiet, false);
+    let path = args.cache.or_else(cache_path).ok_or_else(|| {
+        cltrace::Error::Invalid("no cache location: set CLTRACE_TUNE_CACHE or HOME".into())
+    })?;
+    let scene = render::describe_scene(args.scene.as_deref())?;
+    let mesh = scene.mesh.load()?;
+    let all = list_devices()?;
+    let chosen: Vec<_> = if args.devices.trim().eq_ignore_ascii_case("all") {
+        all.clone()
+    } else {
+        args.devices
+            .split(',')
+            .map(|s| s.trim().parse::<DeviceSelector>()?.pick(&all).cloned())
+            .collect::<cltrace::Result<_>>()?
+    };
+    let mut cache = TuneCache::load(&path);
+    println!(
+        "| device | layout | work-group | primary Mrays/s | diffuse Mrays/s |\n|---|---|---|---|---|"
+    );
+    for info in chosen {
+        let device = ClDevice::open(info)?;
+        verbosity.say(format!(
+            "tuning {} on {}",
+            device.info.name,
+            scene.mesh.name()
+        ));
+        let results = tune_device(&device, &mesh, args.repetitions, &mut |r| {
+            println!(
+                "| {} | {} | {}x{} | {:.1} | {:.1} |",
+                device.info.name,
+                r.layout.name(),
+                r.work_group[0],
+                r.work_group[1],
+                r.primary_mrays,
+                r.diffuse_mrays
+            );
+        })?;
+        let best = &results[0];
+        verbosity.say(format!(
+            "best on {}: {} with {}x{} work-groups ({:.1} primary, {:.1} diffuse Mrays/s)",
+            device.info.name,
+            best.layout.name(),
+            best.work_group[0],
+            best.work_group[1],
+            best.primary_mrays,
+            best.diffuse_mrays
+        ));
+        cache.devices.insert(
+            device.info.key(),
+            cltrace::tune::Tuning {
+                layout: best.layout,
+                work_group: best.work_group,
+                primary_mrays: best.primary_mrays,
+                diffuse_mrays: best.diffuse_mrays,
+                scene: scene.mesh.name(),
+            },
+        );
+    }
+    cache.save(&path)?;
+    verbosity.say(format!("saved to {}", path.display()));
     Ok(())
 }

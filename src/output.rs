@@ -10,21 +10,34 @@ use image::ImageFormat;
 use crate::error::{Error, Result};
 use crate::render::Frame;
 
-/// The image format for `path`'s extension: png, bmp, ppm, jpg/jpeg. Checked before any
-/// work starts, so that a long render never ends in "unknown format".
-pub fn image_format(path: &Path) -> Result<ImageFormat> {
+/// An output image format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutputFormat {
+    /// 8-bit sRGB through the `image` crate (png, bmp, ppm, jpg).
+    Display(ImageFormat),
+    /// OpenEXR, 32-bit float linear radiance.
+    Exr,
+    /// Portable float map, 32-bit float linear radiance.
+    Pfm,
+}
+
+/// The image format for `path`'s extension: png, bmp, ppm, jpg/jpeg, exr, pfm. Checked
+/// before any work starts, so that a long render never ends in "unknown format".
+pub fn image_format(path: &Path) -> Result<OutputFormat> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     let format = match ext.as_str() {
-        "png" => ImageFormat::Png,
-        "bmp" => ImageFormat::Bmp,
-        "ppm" => ImageFormat::Pnm,
-        "jpg" | "jpeg" => ImageFormat::Jpeg,
+        "png" => OutputFormat::Display(ImageFormat::Png),
+        "bmp" => OutputFormat::Display(ImageFormat::Bmp),
+        "ppm" => OutputFormat::Display(ImageFormat::Pnm),
+        "jpg" | "jpeg" => OutputFormat::Display(ImageFormat::Jpeg),
+        "exr" => OutputFormat::Exr,
+        "pfm" => OutputFormat::Pfm,
         _ => {
             return Err(Error::Invalid(format!(
-                "{}: unknown image format `.{ext}`: use .png, .bmp, .ppm or .jpg",
+                "{}: unknown image format `.{ext}`: use .png, .bmp, .ppm, .jpg, .exr or .pfm",
                 path.display()
             )));
         }
@@ -53,15 +66,67 @@ fn folder_of(path: &Path) -> &Path {
     }
 }
 
-/// Writes the frame's colours as an image, atomically.
+/// Writes the frame as an image, atomically: display formats get the colours (tone-mapped
+/// radiance for the progressive modes), float formats the linear radiance (or, for the
+/// modes that shade one hit, the colours as numbers in [0, 1]).
 pub fn write_image(frame: &Frame, path: &Path) -> Result<()> {
-    let format = image_format(path)?;
-    let image = frame.to_rgb_image();
-    write_atomically(path, |w| {
-        image
-            .write_to(w, format)
-            .map_err(|e| Error::output(path, e))
-    })
+    match image_format(path)? {
+        OutputFormat::Display(format) => {
+            let image = frame.to_rgb_image();
+            write_atomically(path, |w| {
+                image
+                    .write_to(w, format)
+                    .map_err(|e| Error::output(path, e))
+            })
+        }
+        OutputFormat::Exr => {
+            let pixels: Vec<f32> = linear(frame).into_iter().flatten().collect();
+            let image = image::Rgb32FImage::from_raw(frame.width, frame.height, pixels)
+                .expect("frame size matches");
+            write_atomically(path, |w| {
+                image
+                    .write_to(w, ImageFormat::OpenExr)
+                    .map_err(|e| Error::output(path, e))
+            })
+        }
+        OutputFormat::Pfm => {
+            let pixels = linear(frame);
+            write_atomically(path, |w| {
+                write_pfm(w, frame.width, &pixels).map_err(|e| Error::output(path, e))
+            })
+        }
+    }
+}
+
+/// The frame's radiance, or its colours as floats when it has none.
+fn linear(frame: &Frame) -> Vec<[f32; 3]> {
+    match &frame.radiance {
+        Some(r) => r.clone(),
+        None => frame
+            .colors
+            .iter()
+            .map(|c| {
+                let [r, g, b, _] = c.to_le_bytes();
+                [r as f32 / 255.0, g as f32 / 255.0, b as f32 / 255.0]
+            })
+            .collect(),
+    }
+}
+
+/// A colour portable float map: `PF`, the size, `-1.0` (little-endian), then rows of
+/// RGB floats from the bottom row up.
+fn write_pfm(w: &mut impl Write, width: u32, pixels: &[[f32; 3]]) -> std::io::Result<()> {
+    let height = pixels.len() / width.max(1) as usize;
+    write!(w, "PF\n{width} {height}\n-1.0\n")?;
+    let mut bytes = Vec::with_capacity(pixels.len() * 12);
+    for row in pixels.chunks(width as usize).rev() {
+        for p in row {
+            for c in p {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+    }
+    w.write_all(&bytes)
 }
 
 /// Writes the raw hit records: little-endian, row-major, 8 bytes a pixel (u32 triangle
@@ -112,11 +177,17 @@ mod tests {
 
     #[test]
     fn formats_by_extension() {
-        assert_eq!(image_format(Path::new("a.PNG")).unwrap(), ImageFormat::Png);
+        let display = OutputFormat::Display;
+        assert_eq!(
+            image_format(Path::new("a.PNG")).unwrap(),
+            display(ImageFormat::Png)
+        );
         assert_eq!(
             image_format(Path::new("a.jpeg")).unwrap(),
-            ImageFormat::Jpeg
+            display(ImageFormat::Jpeg)
         );
+        assert_eq!(image_format(Path::new("a.exr")).unwrap(), OutputFormat::Exr);
+        assert_eq!(image_format(Path::new("a.pfm")).unwrap(), OutputFormat::Pfm);
         assert!(image_format(Path::new("a.tiff")).is_err());
         assert!(image_format(Path::new("a")).is_err());
         assert!(image_format(Path::new("/no/such/folder/a.png")).is_err());
@@ -138,6 +209,33 @@ mod tests {
         );
         assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 7);
         assert_eq!(f32::from_le_bytes(bytes[12..16].try_into().unwrap()), 2.5);
+    }
+
+    #[test]
+    fn float_images_hold_the_radiance() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut f = Frame::new(2, 2);
+        f.radiance = Some(vec![
+            [0.0, 1.0, 2.0],
+            [3.0, 4.0, 5.0],
+            [6.0, 7.0, 8.0],
+            [9.0, 10.0, 11.5],
+        ]);
+        let pfm = dir.path().join("x.pfm");
+        write_image(&f, &pfm).unwrap();
+        let bytes = std::fs::read(&pfm).unwrap();
+        let header = b"PF\n2 2\n-1.0\n";
+        assert_eq!(&bytes[..header.len()], header);
+        let floats: Vec<f32> = bytes[header.len()..]
+            .chunks(4)
+            .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        // Bottom row first.
+        assert_eq!(&floats[..6], &[6.0, 7.0, 8.0, 9.0, 10.0, 11.5]);
+        let exr = dir.path().join("x.exr");
+        write_image(&f, &exr).unwrap();
+        let back = image::open(&exr).unwrap().into_rgb32f();
+        assert_eq!(back.get_pixel(1, 1).0, [9.0, 10.0, 11.5]);
     }
 
     #[test]

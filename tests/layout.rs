@@ -6,7 +6,10 @@ mod common;
 use std::mem::{offset_of, size_of};
 
 use cltrace::device::KernelSource;
+use cltrace::layout::aila::Bvh64Node;
+use cltrace::layout::wide::{Wide4Node, Wide8Node};
 use cltrace::layout::{BvhNode, Triangle};
+use cltrace::material::Material;
 use cltrace::render::Hit;
 
 #[test]
@@ -16,6 +19,7 @@ fn device_structs_match_the_rust_structs() {
         ("Triangle.v0", offset_of!(Triangle, v0)),
         ("Triangle.prim", offset_of!(Triangle, prim)),
         ("Triangle.v1", offset_of!(Triangle, v1)),
+        ("Triangle.material", offset_of!(Triangle, material)),
         ("Triangle.v2", offset_of!(Triangle, v2)),
         ("sizeof(BvhNode)", size_of::<BvhNode>()),
         ("BvhNode.min", offset_of!(BvhNode, min)),
@@ -28,11 +32,28 @@ fn device_structs_match_the_rust_structs() {
         ("sizeof(Hit)", size_of::<Hit>()),
         ("Hit.prim", offset_of!(Hit, prim)),
         ("Hit.t", offset_of!(Hit, t)),
+        ("sizeof(Material)", size_of::<Material>()),
+        ("Material.albedo", offset_of!(Material, albedo)),
+        ("Material.emission", offset_of!(Material, emission)),
+        ("sizeof(Bvh64Node)", size_of::<Bvh64Node>()),
+        ("Bvh64Node.right_xy", offset_of!(Bvh64Node, right_xy)),
+        ("Bvh64Node.z", offset_of!(Bvh64Node, z)),
+        ("Bvh64Node.refs", offset_of!(Bvh64Node, refs)),
+        ("sizeof(Wide4Node)", size_of::<Wide4Node>()),
+        ("Wide4Node.max_z", offset_of!(Wide4Node, max_z)),
+        ("Wide4Node.child", offset_of!(Wide4Node, child)),
+        ("Wide4Node.count", offset_of!(Wide4Node, count)),
+        ("sizeof(Wide8Node)", size_of::<Wide8Node>()),
+        ("Wide8Node.max_z", offset_of!(Wide8Node, max_z)),
+        ("Wide8Node.child", offset_of!(Wide8Node, child)),
+        ("Wide8Node.count", offset_of!(Wide8Node, count)),
     ];
     // The thesis's node is 32 bytes; a triangle is three 16-byte corners.
     assert_eq!(size_of::<BvhNode>(), 32);
     assert_eq!(size_of::<Triangle>(), 48);
     assert_eq!(size_of::<Hit>(), 8);
+    assert_eq!(size_of::<Bvh64Node>(), 64);
+    assert_eq!((size_of::<Wide4Node>(), size_of::<Wide8Node>()), (128, 256));
 
     let device = common::device();
     let program = device.build(KernelSource::Probe, &[]).unwrap();

@@ -3,7 +3,8 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use cltrace::input::load_mesh;
+use cltrace::input::{load_mesh, load_mesh_with_materials};
+use cltrace::material::Material;
 use cltrace::mesh::Mesh;
 use glam::Vec3;
 
@@ -906,4 +907,75 @@ fn ply_without_faces() {
     let text = "ply\nformat ascii 1.0\nelement face 1\n\
                 property list uchar int vertex_indices\nend_header\n3 0 1 2\n";
     refused_bytes("novertex.ply", text);
+}
+
+/// Materials from the MTL file beside the OBJ: `Kd` and `Ke` per triangle in file order,
+/// the `Ka` above 1 convention for lights, grey for triangles without a (known) material.
+#[test]
+fn obj_materials_come_from_the_mtl_file() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "my colours.mtl",
+        "newmtl red\nKd 1 0 0\n\nnewmtl lamp\nKd 0.5 0.5 0.5\nKe 4 3 2\n\nnewmtl old_lamp\nKa 20 20 20\nKd 1 1 1\n",
+    );
+    let obj = write(
+        dir.path(),
+        "lit.obj",
+        "mtllib my colours.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nusemtl\tred\nf 1 2 3\n\
+         usemtl lamp\nf 1 2 3 \nusemtl nowhere\nf 1 2 3\n usemtl old_lamp\nf 1 2 3\n",
+    );
+    let file = load_mesh_with_materials(&obj).unwrap();
+    assert_eq!(file.warning, None);
+    assert_eq!(file.mesh.triangle_count(), 5);
+    let m = &file.materials;
+    let albedo = |i| m.of(i).albedo;
+    let emission = |i| m.of(i).emission;
+    assert_eq!(albedo(0), Material::default().albedo, "before any usemtl");
+    assert_eq!((albedo(1), emission(1)), ([1.0, 0.0, 0.0], [0.0; 3]));
+    assert_eq!((albedo(2), emission(2)), ([0.5; 3], [4.0, 3.0, 2.0]));
+    assert_eq!(albedo(3), Material::default().albedo, "unknown material");
+    assert_eq!((albedo(4), emission(4)), ([1.0; 3], [20.0; 3]));
+    // Without materials asked for, the same file loads to the same triangles.
+    assert_eq!(corners(&load_mesh(&obj).unwrap()), corners(&file.mesh));
+}
+
+/// A missing or broken MTL file leaves the mesh grey with a warning naming the file.
+#[test]
+fn obj_without_its_mtl_file_is_grey_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = "mtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n";
+    let obj = write(dir.path(), "grey.obj", text);
+    let file = load_mesh_with_materials(&obj).unwrap();
+    let warning = file.warning.expect("a warning");
+    assert!(
+        warning.contains("grey.obj") && warning.contains("material"),
+        "{warning}"
+    );
+    assert_eq!(file.materials.of(0), &Material::default());
+
+    write(dir.path(), "gone.mtl", "newmtl red\nKd one two three\n");
+    let file = load_mesh_with_materials(&obj).unwrap();
+    assert!(file.warning.is_some(), "a broken MTL file warns");
+    assert_eq!(file.materials.of(0), &Material::default());
+}
+
+/// The Cornell box lights itself: its light is an emitter, its walls are not.
+#[test]
+fn cornell_box_has_its_light() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes/cornell_box.obj");
+    if !path.exists() {
+        eprintln!("skipped: {} is absent", path.display());
+        return;
+    }
+    let file = load_mesh_with_materials(&path).unwrap();
+    assert_eq!(file.warning, None);
+    let emitting = (0..file.mesh.triangle_count())
+        .filter(|&i| file.materials.of(i).emits())
+        .count();
+    assert_eq!(emitting, 2, "the light is one quad");
+    let red = (0..file.mesh.triangle_count())
+        .filter(|&i| file.materials.of(i).albedo == [1.0, 0.0, 0.0])
+        .count();
+    assert!(red > 0, "the red wall");
 }

@@ -215,6 +215,40 @@ fn opencl_bvh_matches_the_cpu_reference() {
 }
 
 #[test]
+fn every_layout_matches_the_cpu_reference() {
+    use cltrace::layout::{DeviceLayout, Layout};
+    let device = device();
+    for c in cases() {
+        let reference = reference(&c);
+        let bvh = Bvh::build(&c.mesh, &BuildOptions::default());
+        let sah = bvh.stats().sah_cost;
+        let flat = FlatBvh::new(bvh, &c.mesh);
+        for layout in Layout::ALL {
+            let laid = DeviceLayout::new(flat.clone(), layout, sah);
+            let program =
+                ClTracer::compile(&device, Some((layout, laid.stack_size)), false).unwrap();
+            let mut tracer = ClTracer::with_layout(&device, &program, &laid).unwrap();
+            let shade = ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds());
+            let (frame, _) = tracer
+                .render(
+                    &c.camera.pinhole(),
+                    c.camera.width,
+                    c.camera.height,
+                    &shade,
+                    false,
+                )
+                .unwrap();
+            check(
+                &c,
+                &format!("cl-bvh ({})", layout.name()),
+                &reference,
+                &frame,
+            );
+        }
+    }
+}
+
+#[test]
 fn cpu_bvh_matches_the_cpu_reference() {
     for c in cases() {
         let reference = reference(&c);
@@ -421,4 +455,85 @@ fn ray_buffers_match_the_host_for_closest_and_any_hits() {
             "the rays should both hit and miss ({hits} hits)"
         );
     }
+}
+
+/// Rays lying in the planes of the boxes' faces (a direction component exactly zero, the
+/// origin on a face's plane) are inside those slabs: every layout's kernel must find what
+/// brute force finds, here the edges of nested boxes grazed along their faces.
+#[test]
+fn rays_along_box_faces_match_brute_force() {
+    use cltrace::geometry::Ray;
+    use cltrace::layout::{DeviceLayout, Layout};
+    use cltrace::render::cpu::ClosestHit;
+    use glam::Vec3;
+
+    let device = device();
+    let mesh = generate(Generator::NestedBoxes { count: 3 });
+    let brute = cpu::BruteForce {
+        triangles: triangles_in_order(&mesh, 0..mesh.triangle_count() as u32),
+    };
+    // Every vertex coordinate value, so rays run exactly in the planes of the boxes' faces.
+    let mut planes: Vec<f32> = mesh.positions.iter().flat_map(|p| p.to_array()).collect();
+    planes.sort_by(f32::total_cmp);
+    planes.dedup();
+    let mut rays = Vec::new();
+    for &a in &planes {
+        for &b in planes.iter().step_by(3) {
+            for (o, d) in [
+                (Vec3::new(-3.0, a, b), Vec3::X),
+                (Vec3::new(a, -3.0, b), Vec3::Y),
+                (Vec3::new(a, b, 3.0), Vec3::NEG_Z),
+                (Vec3::new(-3.0, a, b), Vec3::new(1.0, 0.0, 0.37)),
+                // Subnormal components: their inverses overflow to infinity.
+                (Vec3::new(-3.0, a, b), Vec3::new(1.0, 1e-41, -1e-42)),
+                (Vec3::new(a, 3.0, b), Vec3::new(-2e-40, -1.0, 0.0)),
+            ] {
+                rays.push(Ray::new(o, d));
+            }
+        }
+    }
+    let bvh = Bvh::build(&mesh, &BuildOptions::default());
+    let sah = bvh.stats().sah_cost;
+    let flat = FlatBvh::new(bvh, &mesh);
+    let mut hits = 0;
+    for layout in Layout::ALL {
+        let laid = DeviceLayout::new(flat.clone(), layout, sah);
+        let program = ClTracer::compile(&device, Some((layout, laid.stack_size)), false).unwrap();
+        let got = ClTracer::with_layout(&device, &program, &laid)
+            .unwrap()
+            .trace_rays(&rays, f32::INFINITY, false)
+            .unwrap();
+        hits = 0;
+        for (i, ray) in rays.iter().enumerate() {
+            let expected = brute
+                .closest_hit(ray, f32::INFINITY)
+                .map(|(p, t)| (p as u32, t * ray.dir.length()));
+            let host = flat
+                .closest_hit(ray, f32::INFINITY)
+                .map(|(j, t)| (flat.triangles[j].prim, t * ray.dir.length()));
+            let got = (!got[i].is_miss()).then_some((got[i].prim, got[i].t));
+            // The same triangle, or a tie: another triangle really hit at the same distance.
+            let agrees = |a: Option<(u32, f32)>| match (a, expected) {
+                (None, None) => true,
+                (Some((p, t)), Some((q, u))) => {
+                    p == q && t == u
+                        || (t - u).abs() <= TIE * u
+                            && hit_distance(ray, &brute.triangles[p as usize])
+                                .is_some_and(|h| (h - u).abs() <= TIE * u)
+                }
+                _ => false,
+            };
+            assert!(
+                agrees(got),
+                "{}: ray {i} {ray:?}: brute force {expected:?}, kernel {got:?}",
+                layout.name()
+            );
+            assert!(
+                agrees(host),
+                "host BVH: ray {i} {ray:?}: brute force {expected:?}, host {host:?}"
+            );
+            hits += expected.is_some() as usize;
+        }
+    }
+    assert!(hits > rays.len() / 4, "{hits} of {} rays hit", rays.len());
 }

@@ -14,15 +14,19 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
-use crate::bvh::BuildOptions;
+use crate::bvh::{BuildOptions, Bvh};
 use crate::camera::Camera;
 use crate::device::{ClDevice, DeviceSelector, list_devices};
 use crate::error::{Error, Result};
+use crate::geometry::Ray;
 use crate::input::MeshFormat;
 use crate::input::generate::Generator;
 use crate::input::scene_file::MeshSource;
+use crate::layout::FlatBvh;
+use crate::layout::Layout;
+use crate::material::Materials;
 use crate::mesh::Mesh;
-use crate::render::{Method, Renderer, Shade, ShadeParams};
+use crate::render::{Method, PrepareOptions, Renderer, Shade, ShadeParams};
 use crate::report::{Timings, Verbosity};
 
 /// The kinds of rays of the benchmark protocol.
@@ -31,14 +35,47 @@ use crate::report::{Timings, Verbosity};
 pub enum RayKind {
     /// One closest-hit ray per pixel from the eye.
     Primary,
+    /// For each pixel whose primary ray hit, one closest-hit ray from the hit point (offset
+    /// by 1e-4 of the scene radius along the normal turned to the eye) in a cosine-weighted
+    /// direction about that normal: the incoherent case.
+    Diffuse,
 }
 
 impl RayKind {
     pub fn name(self) -> &'static str {
         match self {
             RayKind::Primary => "primary",
+            RayKind::Diffuse => "diffuse",
         }
     }
+}
+
+/// The diffuse rays of the benchmark protocol for `camera`, found with a host BVH (every
+/// method then traces the same rays). Directions come from the counter-based generator with
+/// seed 0, keyed by pixel, so the rays are the same on every machine.
+pub fn diffuse_rays(mesh: &Mesh, camera: &Camera) -> Vec<Ray> {
+    use crate::render::cpu::ClosestHit;
+    use crate::render::integrator::facing_normal;
+    use crate::render::sampling::{Sampler, cosine_direction};
+    use rayon::prelude::*;
+    let bvh = FlatBvh::new(Bvh::build(mesh, &BuildOptions::default()), mesh);
+    let offset = 1e-4 * mesh.bounds().extent().length() * 0.5;
+    let pinhole = camera.pinhole();
+    let width = camera.width;
+    (0..camera.width * camera.height)
+        .into_par_iter()
+        .with_min_len(4096)
+        .filter_map(|pixel| {
+            let ray = pinhole.ray(pixel % width, pixel / width);
+            let (i, t) = bvh.closest_hit(&ray, f32::INFINITY)?;
+            let n = facing_normal(&bvh.triangles[i], ray.dir);
+            let s = Sampler::new(0, pixel, 0);
+            Some(Ray::new(
+                ray.at(t) + n * offset,
+                cosine_direction(n, s.get(0), s.get(1)),
+            ))
+        })
+        .collect()
 }
 
 /// What to measure.
@@ -52,6 +89,8 @@ pub struct BenchRequest {
     /// Folders whose every mesh is added.
     pub scene_folders: Vec<PathBuf>,
     pub methods: Vec<Method>,
+    /// The node layouts `cl-bvh` is measured in.
+    pub layouts: Vec<Layout>,
     /// Device selectors; `None` for every device.
     pub devices: Option<Vec<String>>,
     pub ray_kinds: Vec<RayKind>,
@@ -125,15 +164,16 @@ pub fn run(req: &BenchRequest) -> Result<Vec<BenchRow>> {
     let runs_per_scene: usize = req
         .methods
         .iter()
-        .map(|m| {
-            if m.uses_opencl() {
+        .map(|&m| {
+            let places = if m.uses_opencl() {
                 targets
                     .iter()
                     .filter(|t| matches!(t, Target::Device(_)))
                     .count()
             } else {
                 1
-            }
+            };
+            places * layouts_for(req, m).len()
         })
         .sum::<usize>()
         * req.resolutions.len()
@@ -154,6 +194,16 @@ pub fn run(req: &BenchRequest) -> Result<Vec<BenchRow>> {
         let start = Instant::now();
         let mesh = scene.source.load()?;
         let load_ms = start.elapsed().as_secs_f64() * 1e3;
+        let mut diffuse = std::collections::HashMap::new();
+        if req.ray_kinds.contains(&RayKind::Diffuse) {
+            bar.set_message(format!("diffuse rays for {}", scene.name));
+            for &(w, h) in &req.resolutions {
+                diffuse.insert(
+                    (w, h),
+                    diffuse_rays(&mesh, &Camera::auto(&mesh.bounds(), w, h)?),
+                );
+            }
+        }
         for &method in &req.methods {
             for target in &targets {
                 let device = match (method.uses_opencl(), target) {
@@ -167,28 +217,43 @@ pub fn run(req: &BenchRequest) -> Result<Vec<BenchRow>> {
                     method.name(),
                     device_name(device)
                 ));
-                let mut timings = Timings::default();
-                let mut renderer =
-                    Renderer::prepare(method, &mesh, &req.build, device, &mut timings)?;
-                for &(width, height) in &req.resolutions {
-                    for &kind in &req.ray_kinds {
-                        let row = measure(
-                            req,
-                            scene,
-                            &mesh,
-                            load_ms,
-                            method,
-                            device,
-                            &timings,
-                            &mut renderer,
-                            (width, height),
-                            kind,
-                        )?;
-                        if req.verbosity >= Verbosity::Verbose {
-                            bar.suspend(|| eprintln!("{}", table::row_line(&row)));
+                for layout in layouts_for(req, method) {
+                    let mut timings = Timings::default();
+                    let options = PrepareOptions {
+                        build: req.build,
+                        layout: Some(layout),
+                        sampling: false,
+                    };
+                    let mut renderer = Renderer::prepare(
+                        method,
+                        &mesh,
+                        &Materials::default(),
+                        &options,
+                        device,
+                        &mut timings,
+                    )?;
+                    for &(width, height) in &req.resolutions {
+                        for &kind in &req.ray_kinds {
+                            let row = measure(
+                                req,
+                                scene,
+                                &mesh,
+                                load_ms,
+                                method,
+                                layout,
+                                device,
+                                &timings,
+                                &mut renderer,
+                                (width, height),
+                                diffuse.get(&(width, height)).map(Vec::as_slice),
+                                kind,
+                            )?;
+                            if req.verbosity >= Verbosity::Verbose {
+                                bar.suspend(|| eprintln!("{}", table::row_line(&row)));
+                            }
+                            rows.push(row);
+                            bar.inc(1);
                         }
-                        rows.push(row);
-                        bar.inc(1);
                     }
                 }
             }
@@ -198,6 +263,16 @@ pub fn run(req: &BenchRequest) -> Result<Vec<BenchRow>> {
     Ok(rows)
 }
 
+/// The layouts a method is measured in: every requested one for `cl-bvh`, only the
+/// thesis's (the one they use) for the others.
+fn layouts_for(req: &BenchRequest, method: Method) -> Vec<Layout> {
+    if method == Method::ClBvh {
+        req.layouts.clone()
+    } else {
+        vec![Layout::Bin32]
+    }
+}
+
 #[allow(clippy::too_many_arguments)]
 fn measure(
     req: &BenchRequest,
@@ -205,21 +280,43 @@ fn measure(
     mesh: &Mesh,
     load_ms: f64,
     method: Method,
+    layout: Layout,
     device: Option<&ClDevice>,
     timings: &Timings,
     renderer: &mut Renderer,
     (width, height): (u32, u32),
+    diffuse: Option<&[Ray]>,
     kind: RayKind,
 ) -> Result<BenchRow> {
     let camera = Camera::auto(&mesh.bounds(), width, height)?;
     let shade = ShadeParams::new(Shade::Lambert, &camera, &mesh.bounds());
-    let rays = width as u64 * height as u64;
+    let diffuse = diffuse.unwrap_or_default();
+    let rays = match kind {
+        RayKind::Primary => width as u64 * height as u64,
+        RayKind::Diffuse => diffuse.len() as u64,
+    };
+    // One timed frame of this run: its trace (kernel) time.
+    let frame = |renderer: &mut Renderer| -> Result<f64> {
+        Ok(match kind {
+            RayKind::Primary => renderer.render(&camera, &shade, false)?.1.trace_ms,
+            RayKind::Diffuse => {
+                renderer
+                    .trace_rays(diffuse, f32::INFINITY, false)?
+                    .1
+                    .trace_ms
+            }
+        })
+    };
     let mut row = BenchRow {
         scene: scene.name.clone(),
         triangles: mesh.triangle_count(),
         width,
         height,
-        method: method.name().to_string(),
+        method: if method == Method::ClBvh {
+            format!("{}:{}", method.name(), layout.name())
+        } else {
+            method.name().to_string()
+        },
         device: device_name(device),
         compute_units: device.map_or_else(
             || rayon::current_num_threads() as u32,
@@ -239,8 +336,11 @@ fn measure(
         skipped: None,
     };
     if matches!(method, Method::CpuBrute | Method::ClBrute) {
-        let estimate_s = brute_estimate_s(renderer, &camera, &shade, mesh.triangle_count())?
-            * (req.warmup + req.repetitions) as f64;
+        let per_frame = match kind {
+            RayKind::Primary => brute_estimate_s(renderer, &camera, &shade, mesh.triangle_count())?,
+            RayKind::Diffuse => brute_rays_estimate_s(renderer, diffuse, mesh.triangle_count())?,
+        };
+        let estimate_s = per_frame * (req.warmup + req.repetitions) as f64;
         if estimate_s > req.brute_budget_s {
             row.skipped = Some(format!(
                 "estimated {estimate_s:.0} s for {} frames > {} s budget",
@@ -250,16 +350,19 @@ fn measure(
             return Ok(row);
         }
     }
+    if rays == 0 {
+        row.skipped = Some("no rays: the camera sees nothing".into());
+        return Ok(row);
+    }
     for _ in 0..req.warmup {
-        renderer.render(&camera, &shade, false)?;
+        frame(renderer)?;
     }
     let mut kernel = Vec::new();
     let mut wall = Vec::new();
     for _ in 0..req.repetitions {
         let start = Instant::now();
-        let (_, t) = renderer.render(&camera, &shade, false)?;
+        kernel.push(frame(renderer)?);
         wall.push(start.elapsed().as_secs_f64() * 1e3);
-        kernel.push(t.trace_ms);
     }
     let median_kernel = median(&mut kernel);
     row.kernel_ms_median = Some(median_kernel);
@@ -294,6 +397,20 @@ fn brute_estimate_s(
             return Ok(t.trace_ms / probed * rays as f64 / 1e3);
         }
         pixels = (pixels * 8).min(rays);
+    }
+}
+
+/// [`brute_estimate_s`] for a ray buffer: growing prefixes of the rays.
+fn brute_rays_estimate_s(renderer: &mut Renderer, rays: &[Ray], triangles: usize) -> Result<f64> {
+    let mut n = ((1usize << 24) / triangles)
+        .clamp(16, rays.len().max(16))
+        .min(rays.len());
+    loop {
+        let (_, t) = renderer.trace_rays(&rays[..n], f32::INFINITY, false)?;
+        if t.trace_ms >= 20.0 || n >= rays.len() {
+            return Ok(t.trace_ms / n.max(1) as f64 * rays.len() as f64 / 1e3);
+        }
+        n = (n * 8).min(rays.len());
     }
 }
 

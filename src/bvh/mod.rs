@@ -6,6 +6,7 @@
 //! [`Bvh::prim_order`]. The device layouts in [`crate::layout`] start from this tree.
 
 mod build;
+pub mod optimize;
 mod stats;
 mod traverse;
 
@@ -51,6 +52,11 @@ pub struct BuildOptions {
     /// Deepest tree allowed (2 to [`MAX_DEPTH`]). Where the SAH would go deeper the builder
     /// switches to median splits in time; a node at this depth is a leaf, whatever its size.
     pub max_depth: u32,
+    /// Rounds of post-build optimization by node reinsertion (0 to
+    /// [`optimize::MAX_ROUNDS`]; 0, the default, is off): each moves the worst-placed
+    /// inner nodes to where they cost least, lowering the SAH cost; rounds stop early once
+    /// one gains less than 0.1%.
+    pub optimize_rounds: u32,
 }
 
 impl Default for BuildOptions {
@@ -60,6 +66,7 @@ impl Default for BuildOptions {
             bins: 32,
             max_leaf_size: 8,
             max_depth: MAX_DEPTH,
+            optimize_rounds: 0,
         }
     }
 }
@@ -85,6 +92,13 @@ impl BuildOptions {
                 self.max_depth
             )));
         }
+        if self.optimize_rounds > optimize::MAX_ROUNDS {
+            return Err(crate::Error::Invalid(format!(
+                "--optimize {} is out of range: use 0 to {}",
+                self.optimize_rounds,
+                optimize::MAX_ROUNDS
+            )));
+        }
         Ok(())
     }
 }
@@ -104,7 +118,11 @@ impl Bvh {
     /// have passed [`Mesh::check`]; any other (NaN coordinates, say) still builds a valid
     /// tree, of no particular quality, without panicking.
     pub fn build(mesh: &Mesh, options: &BuildOptions) -> Bvh {
-        build::build(mesh, options)
+        let mut bvh = build::build(mesh, options);
+        if options.optimize_rounds > 0 {
+            bvh.optimize(options.optimize_rounds, options.max_depth);
+        }
+        bvh
     }
 
     pub fn stats(&self) -> BvhStats {

@@ -13,42 +13,64 @@ use crate::triangle::WatertightRay;
 /// is exactly 1 + 3 ulp.
 pub const ROBUST_EXIT: f32 = 1.0 + 3.0 * f32::EPSILON;
 
-/// Per-ray constants of the slab test. Zero direction components become +-1e-30, so that
-/// every product is finite (no 0 * inf) and a ray lying in a slab's plane counts as inside.
+/// Per-ray constants of the slab test, with each slab's near and far planes picked by the
+/// sign of the direction (not by comparing distances, so that a NaN never stands in for
+/// the wrong one).
+///
+/// A zero direction component gives an infinite inverse. Where the origin lies in that
+/// slab's plane, `0 * inf` makes the distance NaN, which the NaN-ignoring `min` and `max`
+/// skip: a ray lying in a slab's plane counts as inside it (a substitute like 1e-30 would
+/// have it leave the box at t = 0). A component so small (subnormal) that its inverse
+/// overflows gets `+-f32::MAX` for the near plane, an entry no later than the true one, and
+/// the infinity for the far plane, an exit no earlier: both err towards visiting the box.
+/// Every other ray gets the plain inverse for both.
 #[derive(Clone, Copy, Debug)]
 pub struct RayBox {
     org: [f32; 3],
-    inv: [f32; 3],
+    inv_near: [f32; 3],
+    inv_far: [f32; 3],
+    negative: [bool; 3],
 }
 
 impl RayBox {
     pub fn new(ray: &Ray) -> Self {
-        let inv = ray.dir.to_array().map(|d| {
-            let d = if d.abs() < 1e-30 {
-                1e-30f32.copysign(d)
+        let dir = ray.dir.to_array();
+        let inv_far = dir.map(|d| 1.0 / d);
+        let inv_near = inv_far.map(|i| {
+            if i.is_infinite() {
+                f32::MAX.copysign(i)
             } else {
-                d
-            };
-            1.0 / d
+                i
+            }
         });
         RayBox {
             org: ray.origin.to_array(),
-            inv,
+            inv_near,
+            inv_far,
+            negative: dir.map(f32::is_sign_negative),
         }
     }
 
     /// The entry distance into `node`'s box if the ray meets it before `t_max`.
     #[inline]
     pub fn hit(&self, node: &BvhNode, t_max: f32) -> Option<f32> {
-        let (o, inv) = (self.org, self.inv);
-        let t0x = (node.min[0] - o[0]) * inv[0];
-        let t1x = (node.max[0] - o[0]) * inv[0];
-        let t0y = (node.min[1] - o[1]) * inv[1];
-        let t1y = (node.max[1] - o[1]) * inv[1];
-        let t0z = (node.min[2] - o[2]) * inv[2];
-        let t1z = (node.max[2] - o[2]) * inv[2];
-        let near = t0x.min(t1x).max(t0y.min(t1y)).max(t0z.min(t1z).max(0.0));
-        let far = (t0x.max(t1x).min(t0y.max(t1y)).min(t0z.max(t1z)) * ROBUST_EXIT).min(t_max);
+        let o = self.org;
+        let slab = |k: usize| {
+            let (near, far) = if self.negative[k] {
+                (node.max[k], node.min[k])
+            } else {
+                (node.min[k], node.max[k])
+            };
+            (
+                (near - o[k]) * self.inv_near[k],
+                (far - o[k]) * self.inv_far[k],
+            )
+        };
+        let (nx, fx) = slab(0);
+        let (ny, fy) = slab(1);
+        let (nz, fz) = slab(2);
+        let near = nx.max(ny).max(nz.max(0.0));
+        let far = (fx.min(fy).min(fz) * ROBUST_EXIT).min(t_max);
         (near <= far).then_some(near)
     }
 }

@@ -16,15 +16,36 @@ pub fn bvh_report(scene: Option<&Path>, options: &BuildOptions, repeat: u32) -> 
     let scene = describe_scene(scene)?;
     let mut timings = Timings::default();
     let mesh = timings.time("load", || scene.mesh.load())?;
+    // The optimization is timed apart from the build (both the best of `repeat`).
+    let build_options = BuildOptions {
+        optimize_rounds: 0,
+        ..*options
+    };
     let mut best_ms = f64::INFINITY;
     let mut bvh = None;
     for _ in 0..repeat.max(1) {
         let start = std::time::Instant::now();
-        let built = Bvh::build(&mesh, options);
+        let built = Bvh::build(&mesh, &build_options);
         best_ms = best_ms.min(start.elapsed().as_secs_f64() * 1e3);
         bvh = Some(built);
     }
-    let bvh = bvh.expect("built at least once");
+    let mut bvh = bvh.expect("built at least once");
+    let built_cost = bvh.stats().sah_cost;
+    let mut optimized = None;
+    if options.optimize_rounds > 0 {
+        let mut best_opt_ms = f64::INFINITY;
+        for _ in 0..repeat.max(1) {
+            let mut tree = bvh.clone();
+            let start = std::time::Instant::now();
+            let report = tree.optimize(options.optimize_rounds, options.max_depth);
+            best_opt_ms = best_opt_ms.min(start.elapsed().as_secs_f64() * 1e3);
+            optimized = Some((tree, report, best_opt_ms));
+        }
+    }
+    let optimized = optimized.map(|(tree, report, ms)| {
+        bvh = tree;
+        (report, ms)
+    });
     let s = bvh.stats();
     let layout_start = std::time::Instant::now();
     let flat = FlatBvh::new(bvh, &mesh);
@@ -49,13 +70,29 @@ pub fn bvh_report(scene: Option<&Path>, options: &BuildOptions, repeat: u32) -> 
         "leaf size",
         format!("mean {:.2}, max {}", s.mean_leaf_size, s.max_leaf_size),
     );
-    line(
-        "SAH cost",
-        format!(
-            "{:.3} (C_trav = {TRAVERSAL_COST}, C_isect = {INTERSECTION_COST})",
-            s.sah_cost
-        ),
-    );
+    let costs = format!("(C_trav = {TRAVERSAL_COST}, C_isect = {INTERSECTION_COST})");
+    match optimized {
+        None => line("SAH cost", format!("{:.3} {costs}", s.sah_cost)),
+        Some((report, _)) => {
+            line(
+                &format!(
+                    "SAH cost ({})",
+                    format!("{:?}", options.builder).to_lowercase()
+                ),
+                format!("{built_cost:.3} {costs}"),
+            );
+            line(
+                "SAH cost (optimized)",
+                format!(
+                    "{:.3} ({:+.2}%; {} of {} moves kept)",
+                    s.sah_cost,
+                    (s.sah_cost / built_cost - 1.0) * 100.0,
+                    report.moves,
+                    report.attempts
+                ),
+            );
+        }
+    }
     line(
         "build time",
         format!(
@@ -65,6 +102,18 @@ pub fn bvh_report(scene: Option<&Path>, options: &BuildOptions, repeat: u32) -> 
             rayon::current_num_threads()
         ),
     );
+    if let Some((report, ms)) = optimized {
+        line(
+            "optimize time",
+            format!(
+                "{} (best of {}, {} of at most {} rounds, 1 thread)",
+                format_ms(ms),
+                repeat.max(1),
+                report.rounds,
+                options.optimize_rounds
+            ),
+        );
+    }
     line("layout time", format_ms(layout_ms));
     line("load time", format_ms(timings.get("load").unwrap_or(0.0)));
     line(

@@ -5,16 +5,34 @@ use std::path::{Path, PathBuf};
 use crate::bvh::BuildOptions;
 use crate::camera::Camera;
 use crate::device::{ClDevice, DeviceSelector};
+use crate::error::Error;
 use crate::error::Result;
+use crate::geometry::Aabb;
 use crate::input::scene_file::{CameraSettings, RenderSettings, SceneDescription};
 use crate::output;
-use crate::render::{Frame, Method, Renderer, Shade, ShadeParams};
+use crate::render::integrator::{Accumulation, Light, Lighting, SampleSettings};
+use crate::render::{Frame, Method, PrepareOptions, Renderer, Shade, ShadeParams, tone_map};
 use crate::report::{Timings, Verbosity};
 
 /// The method when neither the scene nor the flags name one.
 pub const DEFAULT_METHOD: Method = Method::ClBvh;
 /// The shading when neither the scene nor the flags name one.
 pub const DEFAULT_SHADE: Shade = Shade::Lambert;
+/// Samples per pixel when none are given: path tracing needs many, a hard shadow a few
+/// (for smooth edges), ambient occlusion one (its rays are in `--ao-samples`).
+pub const DEFAULT_SPP: [(Shade, u32); 3] = [(Shade::Path, 16), (Shade::Shadow, 4), (Shade::Ao, 1)];
+/// The most samples per pixel accepted (float sums stay exact to about 1 part in 10^3).
+pub const MAX_SPP: u32 = 65536;
+pub const DEFAULT_AO_SAMPLES: u32 = 16;
+pub const MAX_AO_SAMPLES: u32 = 1024;
+/// Ambient occlusion rays reach this share of the scene's bounding radius by default.
+pub const AO_DISTANCE_SHARE: f32 = 0.25;
+pub const DEFAULT_MAX_BOUNCES: u32 = 8;
+pub const MAX_BOUNCES: u32 = 1024;
+
+/// The stop flag of progressive renders: set (by Ctrl-C, in the binary) to end sampling
+/// early and write what has accumulated.
+pub static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
 /// Everything `cltrace render` was asked to do.
 #[derive(Clone, Debug, Default)]
@@ -32,7 +50,16 @@ pub struct RenderRequest {
     pub device: Option<String>,
     /// How to build the BVH, for BVH methods.
     pub build: BuildOptions,
+    /// Where to go when the OpenCL device fails; `None` means the error ends the run.
+    pub fallback: Option<Fallback>,
     pub verbosity: Verbosity,
+}
+
+/// Where `--fallback` sends a render whose OpenCL device fails.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Fallback {
+    /// The same method on the host: cl-bvh becomes cpu-bvh, cl-brute cpu-brute.
+    Cpu,
 }
 
 /// What a finished render reports.
@@ -43,6 +70,66 @@ pub struct RenderOutcome {
     /// The OpenCL device's name, for OpenCL methods.
     pub device: Option<String>,
     pub timings: Timings,
+}
+
+/// Refuses sampling settings out of range before any work is done.
+pub fn check_sampling(render: &RenderSettings) -> Result<()> {
+    let range = |name: &str, value: Option<u32>, lo: u32, hi: u32| match value {
+        Some(v) if !(lo..=hi).contains(&v) => Err(Error::Invalid(format!(
+            "{name} {v} is out of range: use {lo} to {hi}"
+        ))),
+        _ => Ok(()),
+    };
+    range("--spp", render.spp, 1, MAX_SPP)?;
+    range("--ao-samples", render.ao_samples, 1, MAX_AO_SAMPLES)?;
+    range("--max-bounces", render.max_bounces, 0, MAX_BOUNCES)?;
+    if let Some(d) = render.ao_distance
+        && !(d > 0.0 && d.is_finite())
+    {
+        return Err(Error::Invalid(format!(
+            "--ao-distance {d} must be a positive number"
+        )));
+    }
+    if let Some(light) = &render.light {
+        light.parse::<Light>().map_err(Error::Invalid)?;
+    }
+    Ok(())
+}
+
+/// The sampling of a progressive shade mode, with its samples per pixel, from the settings
+/// (defaults filled in; `None` for the modes that shade one hit).
+pub fn sample_settings(
+    render: &RenderSettings,
+    shade: Shade,
+    bounds: &Aabb,
+) -> Result<Option<(SampleSettings, u32)>> {
+    let radius = (bounds.extent().length() * 0.5).max(f32::MIN_POSITIVE);
+    let lighting = match shade {
+        Shade::Ao => Lighting::Ao {
+            samples: render.ao_samples.unwrap_or(DEFAULT_AO_SAMPLES),
+            distance: render.ao_distance.unwrap_or(AO_DISTANCE_SHARE * radius),
+        },
+        Shade::Shadow => Lighting::Shadow {
+            light: match &render.light {
+                Some(l) => l.parse().map_err(Error::Invalid)?,
+                None => Light::default_sun(),
+            },
+        },
+        Shade::Path => Lighting::Path {
+            max_bounces: render.max_bounces.unwrap_or(DEFAULT_MAX_BOUNCES),
+        },
+        Shade::Normal | Shade::Depth | Shade::Lambert => return Ok(None),
+    };
+    let default_spp = DEFAULT_SPP
+        .iter()
+        .find(|(s, _)| *s == shade)
+        .map_or(1, |(_, n)| *n);
+    let settings = SampleSettings {
+        lighting,
+        offset: 1e-4 * radius,
+        seed: render.seed.unwrap_or(0),
+    };
+    Ok(Some((settings, render.spp.unwrap_or(default_spp))))
 }
 
 /// Reads the scene description a render request names.
@@ -60,14 +147,42 @@ pub fn describe_scene(scene: Option<&Path>) -> Result<SceneDescription> {
 }
 
 /// Runs a render request end to end. Every check that needs no work (output format and
-/// folder, resolution, field of view, device) happens before the mesh is loaded.
+/// folder, resolution, field of view, device) happens before the mesh is loaded. With
+/// `--fallback cpu`, a device failure (none found, a failed build, out of memory, lost)
+/// reruns the render on the host, saying so; without it, it is the run's error.
 pub fn run(req: &RenderRequest) -> Result<RenderOutcome> {
-    let v = req.verbosity;
     let scene = describe_scene(req.scene.as_deref())?;
+    let method = req
+        .render
+        .method
+        .or(scene.render.method)
+        .unwrap_or(DEFAULT_METHOD);
+    match (render_with(req, &scene, method), req.fallback) {
+        (Err(e @ Error::Device(_)), Some(Fallback::Cpu)) => {
+            let host = match method {
+                Method::ClBrute => Method::CpuBrute,
+                _ => Method::CpuBvh,
+            };
+            req.verbosity.say(format!(
+                "note: {e}; rendering with {} instead (--fallback cpu)",
+                host.name()
+            ));
+            render_with(req, &scene, host)
+        }
+        (outcome, _) => outcome,
+    }
+}
+
+fn render_with(
+    req: &RenderRequest,
+    scene: &SceneDescription,
+    method: Method,
+) -> Result<RenderOutcome> {
+    let v = req.verbosity;
     let camera_settings = req.camera.over(scene.camera);
-    let render = req.render.over(scene.render);
-    let method = render.method.unwrap_or(DEFAULT_METHOD);
+    let render = req.render.clone().over(scene.render.clone());
     let shade = render.shade.unwrap_or(DEFAULT_SHADE);
+    check_sampling(&render)?;
 
     output::image_format(&req.output)?;
     req.build.check()?;
@@ -84,13 +199,21 @@ pub fn run(req: &RenderRequest) -> Result<RenderOutcome> {
         let opening = method
             .uses_opencl()
             .then(|| s.spawn(|| ClDevice::select(&selector)));
-        let mesh = timings.time("load", || scene.mesh.load());
+        let mesh = timings.time("load", || scene.mesh.load_with_materials());
         let device = match opening {
             Some(handle) => Some(handle.join().expect("opening a device does not panic")?),
             None => None,
         };
         Ok::<_, crate::Error>((device, mesh?))
     })?;
+    let crate::input::MeshFile {
+        mesh,
+        materials,
+        warning,
+    } = mesh;
+    if let Some(warning) = warning {
+        v.say(format!("warning: {warning}"));
+    }
     if let Some(d) = &device {
         v.detail(format!("device: {}", d.info));
     }
@@ -112,9 +235,22 @@ pub fn run(req: &RenderRequest) -> Result<RenderOutcome> {
         camera.width,
         camera.height
     ));
+    let sampling = sample_settings(&render, shade, &bounds)?;
     let shade = ShadeParams::new(shade, &camera, &bounds);
 
-    let mut renderer = Renderer::prepare(method, &mesh, &req.build, device.as_ref(), &mut timings)?;
+    let options = PrepareOptions {
+        build: req.build,
+        layout: render.layout,
+        sampling: sampling.is_some(),
+    };
+    let mut renderer = Renderer::prepare(
+        method,
+        &mesh,
+        &materials,
+        &options,
+        device.as_ref(),
+        &mut timings,
+    )?;
     if let Some(s) = &renderer.bvh {
         v.detail(format!(
             "bvh: {} nodes, {} leaves, depth {}, mean leaf {:.2}, SAH cost {:.2}, {} threads",
@@ -126,12 +262,45 @@ pub fn run(req: &RenderRequest) -> Result<RenderOutcome> {
             rayon::current_num_threads()
         ));
     }
-    let (frame, times) = renderer.render(&camera, &shade, v.progress())?;
-    if method.uses_opencl() {
-        timings.add("kernel", times.trace_ms);
-        timings.add("read-back", times.read_back_ms);
+    let (mut frame, times) = renderer.render(&camera, &shade, v.progress())?;
+    let (traced, read_back) = if method.uses_opencl() {
+        ("kernel", "read-back")
     } else {
-        timings.add("trace", times.trace_ms);
+        ("trace", "read-back")
+    };
+    timings.add(traced, times.trace_ms);
+    if method.uses_opencl() {
+        timings.add(read_back, times.read_back_ms);
+    }
+    if let Some((settings, spp)) = sampling {
+        let mut accumulation = Accumulation::new(camera.width, camera.height);
+        let times = renderer.render_samples(
+            &camera,
+            &settings,
+            0..spp,
+            &mut accumulation,
+            &STOP,
+            v.progress(),
+        )?;
+        timings.add("samples", times.trace_ms);
+        if method.uses_opencl() {
+            timings.add(read_back, times.read_back_ms);
+        }
+        let taken = accumulation.pixels.iter().map(|p| p[3] as u64).sum::<u64>() as f64
+            / accumulation.pixels.len() as f64;
+        if taken < spp as f64 {
+            v.say(format!(
+                "stopped early: {taken:.1} of {spp} samples per pixel were taken; writing those"
+            ));
+        }
+        v.detail(format!(
+            "samples: {taken:.1} per pixel, {:.2} million rays, {:.1} Mrays/s",
+            accumulation.rays as f64 / 1e6,
+            accumulation.rays as f64 / times.trace_ms.max(1e-9) / 1e3
+        ));
+        let radiance = accumulation.radiance();
+        frame.colors = tone_map(&radiance, shade.shade);
+        frame.radiance = Some(radiance);
     }
 
     timings.time("write", || -> Result<()> {

@@ -51,6 +51,7 @@ pub struct DeviceInfo {
     pub max_allocation: u64,
     pub max_work_group_size: usize,
     pub opencl_c_version: String,
+    pub driver_version: String,
     /// `CL_DEVICE_MEM_BASE_ADDR_ALIGN`, in bytes.
     pub base_address_alignment: usize,
     /// Whether `-cl-fp32-correctly-rounded-divide-sqrt` is honoured.
@@ -63,6 +64,14 @@ impl DeviceInfo {
     /// `P:D`, the index `--device` accepts.
     pub fn index(&self) -> String {
         format!("{}:{}", self.platform_index, self.device_index)
+    }
+
+    /// What identifies the device across runs (and cache files): platform, name, driver.
+    pub fn key(&self) -> String {
+        format!(
+            "{} / {} / {}",
+            self.platform_name, self.name, self.driver_version
+        )
     }
 
     /// Row alignment of pitched output buffers: the device's base address alignment, and
@@ -118,6 +127,10 @@ impl DeviceInfo {
                 R::OpenclCVersion(s) => s.trim().to_string(),
                 _ => String::new(),
             },
+            driver_version: match info(Info::DriverVersion)? {
+                R::DriverVersion(s) => s.trim().to_string(),
+                _ => String::new(),
+            },
             base_address_alignment: (number(info(Info::MemBaseAddrAlign)?) / 8) as usize,
             correctly_rounded_divide,
             platform,
@@ -140,8 +153,25 @@ impl fmt::Display for DeviceInfo {
     }
 }
 
-/// Every device of every platform, in platform then device order.
+/// Every device of every platform, in platform then device order. The list is read once
+/// per process, under a lock: some drivers (PoCL among them) report no devices when two
+/// threads initialise them at the same moment.
 pub fn list_devices() -> Result<Vec<DeviceInfo>> {
+    static FOUND: std::sync::Mutex<Option<Vec<DeviceInfo>>> = std::sync::Mutex::new(None);
+    let mut found = FOUND
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
+    if let Some(devices) = found.as_ref() {
+        return Ok(devices.clone());
+    }
+    let devices = discover_devices()?;
+    if !devices.is_empty() {
+        *found = Some(devices.clone());
+    }
+    Ok(devices)
+}
+
+fn discover_devices() -> Result<Vec<DeviceInfo>> {
     // Ask for the count first: ocl's own listing sleeps ten seconds before it gives up
     // when no platform is installed.
     let mut count: ocl::core::ffi::cl_uint = 0;

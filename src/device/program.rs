@@ -16,6 +16,9 @@ pub enum KernelSource {
     /// `trace.cl`: the closest-hit kernels, against the BVH when built with `STACK_SIZE`
     /// (its depth), else against every triangle.
     Trace,
+    /// `sample.cl`: the progressive shade modes (ambient occlusion, shadows, path
+    /// tracing), against the BVH or every triangle like `Trace`.
+    Sample,
     /// `probe.cl`: reports the shared structs' layout.
     Probe,
 }
@@ -24,6 +27,7 @@ impl KernelSource {
     pub fn file_name(self) -> &'static str {
         match self {
             KernelSource::Trace => "trace.cl",
+            KernelSource::Sample => "sample.cl",
             KernelSource::Probe => "probe.cl",
         }
     }
@@ -31,6 +35,7 @@ impl KernelSource {
     fn text(self) -> &'static str {
         match self {
             KernelSource::Trace => include_str!("../../cl/trace.cl"),
+            KernelSource::Sample => include_str!("../../cl/sample.cl"),
             KernelSource::Probe => include_str!("../../cl/probe.cl"),
         }
     }
@@ -47,6 +52,16 @@ impl ClDevice {
     /// and device must round identically, so division and square root are correctly
     /// rounded where the device offers it. A failed build reports the device's build log.
     pub fn build(&self, kernel: KernelSource, defines: &[(&str, String)]) -> Result<ocl::Program> {
+        self.build_all(&[kernel], defines)
+    }
+
+    /// Compiles several kernel files into one program (the shared header's include guard
+    /// keeps its second copy out).
+    pub fn build_all(
+        &self,
+        kernels: &[KernelSource],
+        defines: &[(&str, String)],
+    ) -> Result<ocl::Program> {
         let mut options = String::from("-cl-std=CL1.2");
         if self.info.correctly_rounded_divide {
             options.push_str(" -cl-fp32-correctly-rounded-divide-sqrt");
@@ -54,7 +69,13 @@ impl ClDevice {
         for (name, value) in defines {
             options.push_str(&format!(" -D {name}={value}"));
         }
-        self.build_source(kernel.file_name(), &kernel.source(), &options)
+        let names: Vec<&str> = kernels.iter().map(|k| k.file_name()).collect();
+        let source: String = kernels
+            .iter()
+            .map(|k| k.source())
+            .collect::<Vec<_>>()
+            .join("\n");
+        self.build_source(&names.join(" + "), &source, &options)
     }
 
     /// Compiles arbitrary source; `name` labels errors.
@@ -106,7 +127,11 @@ mod tests {
 
     #[test]
     fn header_is_spliced_into_every_kernel() {
-        for k in [KernelSource::Trace, KernelSource::Probe] {
+        for k in [
+            KernelSource::Trace,
+            KernelSource::Sample,
+            KernelSource::Probe,
+        ] {
             let s = k.source();
             assert!(s.contains("typedef struct"), "{}", k.file_name());
             assert!(!s.contains(INCLUDE_LINE), "{}", k.file_name());

@@ -9,6 +9,7 @@ use glam::{Mat3, Vec3};
 use serde::Deserialize;
 
 use crate::error::{Error, Result};
+use crate::material::{Material, Materials};
 use crate::mesh::Mesh;
 
 /// A built-in mesh and its parameters, as written in a scene file's `[generator]` table.
@@ -165,7 +166,28 @@ impl Generator {
         })
     }
 
-    fn check(&self) -> Result<()> {
+    /// The materials of the generated mesh: the sphereflake's spheres a light grey over a
+    /// darker, warmer ground; every other generator grey.
+    pub fn materials(&self, mesh: &Mesh) -> Materials {
+        match *self {
+            Generator::Sphereflake { ground, .. } if ground > 0 => {
+                let spheres = mesh.triangle_count() - 2 * ground as usize * ground as usize;
+                Materials {
+                    list: vec![
+                        Material::diffuse([0.8, 0.8, 0.8]),
+                        Material::diffuse([0.45, 0.4, 0.33]),
+                    ],
+                    per_triangle: (0..mesh.triangle_count())
+                        .map(|i| (i >= spheres) as u32)
+                        .collect(),
+                }
+            }
+            _ => Materials::default(),
+        }
+    }
+
+    /// Checks the parameters: every one in range and at most 100 million triangles.
+    pub fn check(&self) -> Result<()> {
         let bad = |what: &str, range: &str| {
             Err(Error::Invalid(format!(
                 "generator {}: {what} must be {range}",

@@ -2,6 +2,7 @@
 //! and from the built-in generators, and the TOML scene files that name them.
 
 pub mod generate;
+mod mtl;
 mod obj;
 mod ply;
 pub mod scene_file;
@@ -10,6 +11,7 @@ use std::io::Read;
 use std::path::Path;
 
 use crate::error::{Error, Result};
+use crate::material::Materials;
 use crate::mesh::Mesh;
 
 /// Mesh file formats, told apart by extension.
@@ -42,35 +44,142 @@ impl MeshFormat {
 /// Reads a mesh file: OBJ or PLY, plain or gzip-compressed. Every failure is an
 /// [`Error::Input`] naming the file, and the line where the parser knows it.
 pub fn load_mesh(path: &Path) -> Result<Mesh> {
+    Ok(read_mesh(path, false)?.mesh)
+}
+
+/// A mesh file's triangles and materials.
+pub struct MeshFile {
+    pub mesh: Mesh,
+    /// An OBJ's materials from its MTL files (`Kd`, `Ke`); grey for PLY.
+    pub materials: Materials,
+    /// Why the materials are grey although the file names some (a missing or broken MTL
+    /// file): worth a warning, not an error.
+    pub warning: Option<String>,
+}
+
+/// Reads a mesh file with its materials, as [`load_mesh`] does plus the OBJ's MTL files.
+pub fn load_mesh_with_materials(path: &Path) -> Result<MeshFile> {
+    read_mesh(path, true)
+}
+
+fn read_mesh(path: &Path, read_materials: bool) -> Result<MeshFile> {
     let (format, gzip) = MeshFormat::from_path(path).ok_or_else(|| {
         Error::input(
             path,
             "unknown mesh format: expected a .obj, .obj.gz, .ply or .ply.gz file",
         )
     })?;
-    let bytes = read_file(path, gzip)?;
-    let mesh = match format {
-        MeshFormat::Obj => obj::parse(path, &bytes)?,
-        MeshFormat::Ply => ply::parse(path, &bytes)?,
-    };
-    mesh.check(path)?;
-    Ok(mesh)
+    let bytes = read_file(path)?;
+    parse(path, format, gzip, &bytes, read_materials)
 }
 
-/// The whole file, decompressed if `gzip`.
-fn read_file(path: &Path, gzip: bool) -> Result<Vec<u8>> {
+/// Parses a mesh file's bytes (decompressing them first if `gzip`) as [`load_mesh`] does
+/// after reading the file: the fuzz targets and tests call it without a file system.
+/// `path_for_messages` only names the file in errors.
+pub fn parse_mesh_bytes(
+    path_for_messages: &Path,
+    format: MeshFormat,
+    gzip: bool,
+    bytes: &[u8],
+) -> Result<Mesh> {
+    Ok(parse(path_for_messages, format, gzip, bytes, false)?.mesh)
+}
+
+fn parse(
+    path: &Path,
+    format: MeshFormat,
+    gzip: bool,
+    bytes: &[u8],
+    read_materials: bool,
+) -> Result<MeshFile> {
+    let decompressed;
+    let bytes = if gzip {
+        decompressed = gunzip(path, bytes)?;
+        decompressed.as_slice()
+    } else {
+        bytes
+    };
+    let file = match format {
+        MeshFormat::Obj => {
+            let obj = obj::parse(path, bytes, read_materials)?;
+            MeshFile {
+                mesh: obj.mesh,
+                materials: obj.materials,
+                warning: obj.warning,
+            }
+        }
+        MeshFormat::Ply => MeshFile {
+            mesh: ply::parse(path, bytes)?,
+            materials: Materials::default(),
+            warning: None,
+        },
+    };
+    file.mesh.check(path)?;
+    Ok(file)
+}
+
+/// The whole file.
+fn read_file(path: &Path) -> Result<Vec<u8>> {
     if path.is_dir() {
         return Err(Error::input(path, "is a directory, not a mesh file"));
     }
-    let raw = std::fs::read(path).map_err(|e| Error::input(path, io_reason(&e)))?;
-    if !gzip {
-        return Ok(raw);
-    }
-    let mut out = Vec::with_capacity(raw.len() * 4);
-    flate2::read::GzDecoder::new(raw.as_slice())
+    std::fs::read(path).map_err(|e| Error::input(path, io_reason(&e)))
+}
+
+/// The most bytes a gzip-compressed mesh may expand to: far above any mesh cltrace can
+/// index, low enough that a decompression bomb is an error rather than an exhausted machine.
+pub const MAX_DECOMPRESSED_BYTES: u64 = 4 << 30;
+
+/// gzip data decompressed.
+fn gunzip(path: &Path, raw: &[u8]) -> Result<Vec<u8>> {
+    gunzip_at_most(path, raw, MAX_DECOMPRESSED_BYTES)
+}
+
+fn gunzip_at_most(path: &Path, raw: &[u8], limit: u64) -> Result<Vec<u8>> {
+    let mut out = Vec::with_capacity(raw.len().saturating_mul(4));
+    flate2::read::GzDecoder::new(raw)
+        .take(limit + 1)
         .read_to_end(&mut out)
         .map_err(|e| Error::input(path, format!("cannot decompress gzip data: {e}")))?;
+    if out.len() as u64 > limit {
+        return Err(Error::input(
+            path,
+            format!("decompresses to more than {limit} bytes: refused"),
+        ));
+    }
     Ok(out)
+}
+
+/// Text from a file, quoted in backticks for an error message: control characters
+/// escaped (a message stays one clean line) and cut after 60 characters.
+pub(crate) fn quoted(text: &str) -> String {
+    let mut out = String::from("`");
+    for (i, c) in text.chars().enumerate() {
+        if i == 60 {
+            out.push_str("...");
+            break;
+        }
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    out.push('`');
+    out
+}
+
+/// `text` as one clean line: line breaks become spaces, other control characters escapes.
+pub(crate) fn clean_line(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '\n' | '\r' => out.push(' '),
+            c if c.is_control() => out.extend(c.escape_default()),
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 /// A short reason for an I/O error, without the "(os error N)" noise.
@@ -101,5 +210,23 @@ mod tests {
         assert_eq!(f("x.ply.gz"), Some((MeshFormat::Ply, true)));
         assert_eq!(f("x.stl"), None);
         assert_eq!(f("x.gz"), None);
+    }
+
+    /// Data that expands past the bound is refused (a bomb), data within it comes back whole.
+    #[test]
+    fn gzip_expansion_is_bounded() {
+        use std::io::Write;
+        let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+        gz.write_all(&vec![b'#'; 1 << 20]).unwrap();
+        let raw = gz.finish().unwrap();
+        let path = Path::new("bomb.obj.gz");
+        assert_eq!(gunzip_at_most(path, &raw, 1 << 20).unwrap().len(), 1 << 20);
+        let err = gunzip_at_most(path, &raw, (1 << 20) - 1)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("bomb.obj.gz") && err.contains("refused"),
+            "{err}"
+        );
     }
 }

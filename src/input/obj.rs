@@ -7,10 +7,22 @@ use std::path::Path;
 
 use glam::Vec3;
 
+use super::{mtl, quoted};
 use crate::error::{Error, Result};
+use crate::material::Materials;
 use crate::mesh::{Mesh, coordinate_problem};
 
-pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
+/// An OBJ file's mesh and, when asked for, its materials.
+pub(super) struct ObjFile {
+    pub mesh: Mesh,
+    pub materials: Materials,
+    /// Why the materials are grey although the file names some (a missing or broken MTL).
+    pub warning: Option<String>,
+}
+
+/// Parses an OBJ file's bytes; `path` names it in errors and locates its `mtllib` files.
+/// Without `read_materials` no MTL file is opened and every triangle is grey.
+pub(super) fn parse(path: &Path, bytes: &[u8], read_materials: bool) -> Result<ObjFile> {
     // A UTF-8 byte order mark would hide the first line's keyword from tobj, and a first
     // `v` line dropped that way shifts every index after it.
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
@@ -30,9 +42,13 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
         ignore_points: true,
         ignore_lines: true,
     };
-    // Materials are not used yet; a missing .mtl must not stop the geometry.
-    let no_materials = |_: &Path| Err(tobj::LoadError::OpenFileFailed);
-    let (models, _materials) = tobj::load_obj_buf(&mut Cursor::new(bytes), &options, no_materials)
+    // A missing or broken MTL file must not stop the geometry: it comes back as an error
+    // in `library`, and the mesh turns grey with a warning.
+    let load_library = |name: &Path| match read_materials {
+        true => mtl::load_library(path, name),
+        false => Err(tobj::LoadError::OpenFileFailed),
+    };
+    let (models, library) = tobj::load_obj_buf(&mut Cursor::new(bytes), &options, load_library)
         .map_err(|e| describe(path, bytes, e))?;
 
     let mut mesh = Mesh::default();
@@ -51,14 +67,23 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
         );
     }
     check_positions(path, bytes, &mesh)?;
-    Ok(mesh)
+    let (materials, warning) = match read_materials {
+        true => mtl::assign(&models, library, path),
+        false => (Materials::default(), None),
+    };
+    Ok(ObjFile {
+        mesh,
+        materials,
+        warning,
+    })
 }
 
 /// The text tobj is given: what cltrace reads (positions and faces) with every line kept
-/// in place, so that line numbers stay right. Texture coordinates, normals and materials
-/// are blanked out and face references cut to their vertex index: tobj checks `vt`/`vn`
-/// references with arithmetic that overflows (a panic in debug builds) on `f 1/0 2/0 3/0`,
-/// and fails on a `usemtl` without a name. Vertex colours are dropped too: tobj refuses a
+/// in place, so that line numbers stay right. Texture coordinates and normals are blanked
+/// out and face references cut to their vertex index: tobj checks `vt`/`vn` references with
+/// arithmetic that overflows (a panic in debug builds) on `f 1/0 2/0 3/0`. A `usemtl` or
+/// `mtllib` without a name goes too: tobj fails on the first and cannot open the second. Line (`l`) and point (`p`) elements go too: tobj
+/// would make a triangle of `l 1 2 3`. Vertex colours are dropped too: tobj refuses a
 /// file where only some vertices have them.
 fn positions_only(bytes: &[u8]) -> Cow<'_, [u8]> {
     let mut out: Option<Vec<u8>> = None;
@@ -83,37 +108,45 @@ fn positions_only(bytes: &[u8]) -> Cow<'_, [u8]> {
     }
 }
 
-/// The replacement for one line (ending in a newline), or `None` to keep it.
+/// The replacement for one line (ending in a newline), or `None` to keep it. Words are
+/// split as tobj splits them, at any Unicode whitespace (a vertical tab or a no-break space
+/// too): a `vt` reference that tobj sees but this missed would reach tobj's overflowing
+/// arithmetic. A line that is not UTF-8 is kept, for tobj to refuse.
 fn rewrite_line(line: &[u8]) -> Option<Vec<u8>> {
-    let mut words = line
-        .split(|b| b.is_ascii_whitespace())
-        .filter(|w| !w.is_empty());
+    let text = std::str::from_utf8(line).ok()?;
+    let mut words = text.split_whitespace();
     let keyword = words.next()?;
+    let rebuilt = |words: &mut dyn Iterator<Item = &str>| {
+        let mut new = keyword.to_string();
+        for w in words {
+            new.push(' ');
+            new.push_str(w);
+        }
+        new.push('\n');
+        Some(new.into_bytes())
+    };
     match keyword {
-        b"vt" | b"vn" | b"usemtl" | b"mtllib" => Some(b"\n".to_vec()),
-        b"f" | b"l" if line.contains(&b'/') => {
-            let mut new = keyword.to_vec();
-            for w in words {
-                new.push(b' ');
-                match w.split(|&b| b == b'/').next() {
-                    // `/2` has no vertex index: keep it whole for tobj to refuse
-                    Some(v) if !v.is_empty() => new.extend_from_slice(v),
-                    _ => new.extend_from_slice(w),
-                }
-            }
-            new.push(b'\n');
-            Some(new)
+        // Lines and points are not surfaces, but tobj makes a triangle of `l 1 2 3`.
+        "vt" | "vn" | "l" | "p" => Some(b"\n".to_vec()),
+        // tobj takes the name after the first space, so a tab or leading blank would lose
+        // it: write `keyword name` (names may hold spaces), or nothing without a name.
+        "usemtl" | "mtllib" => {
+            let name = text.trim_start()[keyword.len()..].trim();
+            let new = match name.is_empty() {
+                true => "\n".to_string(),
+                false => format!("{keyword} {name}\n"),
+            };
+            (new != text).then(|| new.into_bytes())
         }
+        "f" if text.contains('/') => rebuilt(&mut words.map(|w| {
+            match w.split('/').next() {
+                // `/2` has no vertex index: keep it whole for tobj to refuse
+                Some(v) if !v.is_empty() => v,
+                _ => w,
+            }
+        })),
         // `v x y z r g b`: keep `v x y z`
-        b"v" if words.clone().count() == 6 => {
-            let mut new = keyword.to_vec();
-            for w in words.take(3) {
-                new.push(b' ');
-                new.extend_from_slice(w);
-            }
-            new.push(b'\n');
-            Some(new)
-        }
+        "v" if words.clone().count() == 6 => rebuilt(&mut words.take(3)),
         _ => None,
     }
 }
@@ -188,9 +221,10 @@ fn vertex_problem(words: &[&str]) -> Option<String> {
         return Some("a vertex needs three numbers, as `v x y z`".to_string());
     }
     match words.get(3).map(|w| w.parse::<f32>()) {
-        Some(Err(_)) if words.len() == 4 => {
-            Some(format!("vertex weight `{}` is not a number", words[3]))
-        }
+        Some(Err(_)) if words.len() == 4 => Some(format!(
+            "vertex weight {} is not a number",
+            quoted(words[3])
+        )),
         Some(Ok(w)) if words.len() == 4 && w == 0.0 => Some("vertex weight w is 0".to_string()),
         _ => None,
     }
@@ -221,7 +255,7 @@ fn bad_face(bytes: &[u8]) -> Option<(usize, String)> {
         Some(&"f") => words[1..].iter().find_map(|w| {
             let index = w.split('/').next().unwrap_or("");
             match index.parse::<i64>() {
-                Err(_) => Some(format!("face vertex `{w}` is not an index")),
+                Err(_) => Some(format!("face vertex {} is not an index", quoted(w))),
                 Ok(0) => Some("face vertex index 0: OBJ indices start at 1".to_string()),
                 Ok(i) if i > vertices || -i > vertices => Some(format!(
                     "face vertex index {i} is out of range: {vertices} vertices are defined before this line"

@@ -57,6 +57,9 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
                     .read_payload_for_element(&mut reader, element, &header)
                     .map_err(fail)?;
             }
+            // An element without properties has no bytes in a binary body, so reading
+            // it does nothing, as many times as its count says: 2^64 - 1 would never end.
+            _ if element.properties.is_empty() && header.encoding != Encoding::Ascii => {}
             // Other elements (edges, materials, ...) are read past and dropped.
             _ => {
                 Parser::<Ignored>::new()

@@ -14,7 +14,8 @@
 //!
 //! [render]
 //! method = "cl-bvh"
-//! shade = "lambert"
+//! shade = "path"               # normal, depth, lambert, ao, shadow, path
+//! spp = 64                     # samples per pixel of ao, shadow and path
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -24,6 +25,7 @@ use serde::Deserialize;
 use crate::error::{Error, Result};
 use crate::input::generate::Generator;
 use crate::input::load_mesh;
+use crate::layout::Layout;
 use crate::mesh::Mesh;
 use crate::render::{Method, Shade};
 
@@ -42,6 +44,23 @@ impl MeshSource {
         match self {
             MeshSource::File(path) => load_mesh(path),
             MeshSource::Generator(g) => g.generate(),
+        }
+    }
+
+    /// The mesh and its materials: an OBJ's from its MTL file, a generator's own, grey for
+    /// the rest.
+    pub fn load_with_materials(&self) -> Result<crate::input::MeshFile> {
+        match self {
+            MeshSource::File(path) => crate::input::load_mesh_with_materials(path),
+            MeshSource::Generator(g) => {
+                let mesh = g.generate()?;
+                let materials = g.materials(&mesh);
+                Ok(crate::input::MeshFile {
+                    mesh,
+                    materials,
+                    warning: None,
+                })
+            }
         }
     }
 
@@ -85,18 +104,39 @@ impl CameraSettings {
 }
 
 /// Render settings; `None` means "not said here".
-#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RenderSettings {
     pub method: Option<Method>,
+    /// The BVH node layout of `cl-bvh`.
+    pub layout: Option<Layout>,
     pub shade: Option<Shade>,
+    /// Samples per pixel of the progressive modes (ao, shadow, path).
+    pub spp: Option<u32>,
+    /// Seed of the random numbers of the progressive modes.
+    pub seed: Option<u32>,
+    /// Rays per sample of ambient occlusion.
+    pub ao_samples: Option<u32>,
+    /// Reach of the ambient occlusion rays, in scene units.
+    pub ao_distance: Option<f32>,
+    /// Bounces of the path tracer.
+    pub max_bounces: Option<u32>,
+    /// The light of the shadow mode: `sun:x,y,z` or `point:x,y,z`.
+    pub light: Option<String>,
 }
 
 impl RenderSettings {
     pub fn over(self, base: RenderSettings) -> RenderSettings {
         RenderSettings {
             method: self.method.or(base.method),
+            layout: self.layout.or(base.layout),
             shade: self.shade.or(base.shade),
+            spp: self.spp.or(base.spp),
+            seed: self.seed.or(base.seed),
+            ao_samples: self.ao_samples.or(base.ao_samples),
+            ao_distance: self.ao_distance.or(base.ao_distance),
+            max_bounces: self.max_bounces.or(base.max_bounces),
+            light: self.light.or(base.light),
         }
     }
 }
@@ -151,15 +191,22 @@ impl SceneDescription {
     /// Parses scene text; `path` names it in errors, `base` anchors relative mesh paths.
     pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Self> {
         let file: SceneFile = toml::from_str(text).map_err(|e| {
-            let message = e.message().trim().replace('\n', " ");
+            let message = crate::input::clean_line(e.message().trim());
             match e.span() {
                 Some(span) => Error::input_at(path, line_of(text, span.start), message),
                 None => Error::input(path, message),
             }
         })?;
+        // What can be checked without the mesh is checked here, so that the error names
+        // the scene file.
+        let in_scene = |e: Error| Error::input(path, e.to_string());
+        crate::camera::check_settings(&file.camera).map_err(in_scene)?;
         let mesh = match (file.mesh, file.generator) {
             (Some(mesh), None) => MeshSource::File(base.join(mesh)),
-            (None, Some(generator)) => MeshSource::Generator(generator),
+            (None, Some(generator)) => {
+                generator.check().map_err(in_scene)?;
+                MeshSource::Generator(generator)
+            }
             (Some(_), Some(_)) => {
                 return Err(Error::input(
                     path,

@@ -2,12 +2,14 @@
 //! a BVH, on the CPU or on an OpenCL device. Every method fills the same [`Frame`].
 
 pub mod cpu;
+pub mod integrator;
 pub mod opencl;
 mod renderer;
+pub mod sampling;
 mod shade;
 
-pub use renderer::{Renderer, TraceTimes};
-pub use shade::ShadeParams;
+pub use renderer::{PrepareOptions, Renderer, TraceTimes};
+pub use shade::{ShadeParams, tone_map};
 
 use bytemuck::{Pod, Zeroable};
 use serde::Deserialize;
@@ -62,15 +64,39 @@ pub enum Shade {
     Depth,
     /// A two-sided headlight: |cos| between the geometric normal and the ray.
     Lambert,
+    /// Ambient occlusion: the unoccluded share of cosine-weighted rays (`--ao-samples`,
+    /// `--ao-distance`).
+    Ao,
+    /// The albedo under one light (`--light`) with hard shadows.
+    Shadow,
+    /// Diffuse path tracing: light from emitting materials, or a sky where there are none.
+    Path,
 }
 
 impl Shade {
-    /// The number the kernels use (`SHADE_*` in cl/cltrace.h).
+    /// The number the primary-ray kernel uses (`SHADE_*` in cl/cltrace.h); the progressive
+    /// modes shade their own samples and are given Lambert for the primary pass.
     pub fn code(self) -> i32 {
         match self {
             Shade::Normal => 0,
             Shade::Depth => 1,
-            Shade::Lambert => 2,
+            Shade::Lambert | Shade::Ao | Shade::Shadow | Shade::Path => 2,
+        }
+    }
+
+    /// Whether the mode accumulates samples (`--spp`) rather than shading one hit.
+    pub fn is_progressive(self) -> bool {
+        matches!(self, Shade::Ao | Shade::Shadow | Shade::Path)
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Shade::Normal => "normal",
+            Shade::Depth => "depth",
+            Shade::Lambert => "lambert",
+            Shade::Ao => "ao",
+            Shade::Shadow => "shadow",
+            Shade::Path => "path",
         }
     }
 }
@@ -109,6 +135,9 @@ pub struct Frame {
     pub height: u32,
     pub hits: Vec<Hit>,
     pub colors: Vec<u32>,
+    /// Linear radiance per pixel, for the progressive shade modes (the colours are then its
+    /// tone-mapped form).
+    pub radiance: Option<Vec<[f32; 3]>>,
 }
 
 impl Frame {
@@ -119,6 +148,7 @@ impl Frame {
             height,
             hits: vec![Hit::NONE; n],
             colors: vec![0; n],
+            radiance: None,
         }
     }
 

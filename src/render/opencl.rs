@@ -8,12 +8,14 @@ use indicatif::{ProgressBar, ProgressStyle};
 use ocl::enums::ProfilingInfo;
 use ocl::prm::Float4;
 
+use super::integrator::{Accumulation, Emitters, Light, Lighting, SampleSettings};
 use super::{Frame, Hit, ShadeParams};
 use crate::camera::Pinhole;
 use crate::device::{ClDevice, KernelSource, PitchedBuffer};
 use crate::error::{Error, Result};
 use crate::geometry::Ray;
-use crate::layout::{BvhNode, FlatBvh, Triangle};
+use crate::layout::{DeviceLayout, FlatBvh, Layout, Triangle};
+use crate::material::Material;
 
 /// Default bound on one kernel launch, in milliseconds of device time.
 pub const LAUNCH_TARGET_MS: f64 = 100.0;
@@ -36,10 +38,20 @@ struct Scene {
     bvh: Option<DeviceBvh>,
 }
 
-/// The flat BVH's nodes and the kernels' error flags (bit 0: a stack overflowed).
+/// The BVH's nodes (in whichever layout the program was compiled for) and the kernels'
+/// error flags (bit 0: a stack overflowed).
 struct DeviceBvh {
-    nodes: ocl::Buffer<BvhNode>,
+    nodes: ocl::Buffer<u8>,
     status: ocl::Buffer<u32>,
+}
+
+/// What the shade modes read besides the geometry (`LIGHT_PARAMS` in cl/sample.cl).
+struct DeviceLights {
+    materials: ocl::Buffer<Material>,
+    emitters: ocl::Buffer<u32>,
+    cdf: ocl::Buffer<f32>,
+    count: u32,
+    area: f32,
 }
 
 /// The kernels compiled for one device with their scene uploaded, ready to trace.
@@ -47,8 +59,17 @@ pub struct ClTracer<'d> {
     device: &'d ClDevice,
     program: ocl::Program,
     scene: Scene,
+    lights: Option<DeviceLights>,
     primary: ocl::Kernel,
     bands: BandPlanner,
+    sample_bands: BandPlanner,
+    /// The most bytes one output image may take: the device's largest allocation and an
+    /// eighth of its memory, or less when set (images larger go band by band).
+    image_budget: u64,
+    /// Work-group shape of the image kernels (its product for the ray-buffer kernel).
+    local: [usize; 2],
+    /// The BVH's node layout (`None` for brute force).
+    layout: Option<Layout>,
 }
 
 /// Sizes bands of rows so that each launch takes about [`LAUNCH_TARGET_MS`].
@@ -81,15 +102,34 @@ impl BandPlanner {
 impl<'d> ClTracer<'d> {
     /// Compiles the kernels against a plain triangle list (brute force).
     pub fn compile_brute(device: &'d ClDevice) -> Result<ocl::Program> {
-        device.build(KernelSource::Trace, &[])
+        Self::compile(device, None, false)
     }
 
-    /// Compiles the kernels against the BVH, with a traversal stack as deep as the tree.
+    /// Compiles the kernels against a thesis-layout BVH, with a traversal stack as deep as
+    /// the tree.
     pub fn compile_bvh(device: &'d ClDevice, depth: u32) -> Result<ocl::Program> {
-        device.build(
-            KernelSource::Trace,
-            &[("STACK_SIZE", depth.max(1).to_string())],
-        )
+        Self::compile(device, Some((Layout::Bin32, depth)), false)
+    }
+
+    /// Compiles the tracing kernels, and with `sampling` the progressive shade modes too,
+    /// against a BVH in `layout` with a traversal stack of `stack_size` entries or, for
+    /// `None`, against every triangle.
+    pub fn compile(
+        device: &'d ClDevice,
+        bvh: Option<(Layout, u32)>,
+        sampling: bool,
+    ) -> Result<ocl::Program> {
+        let mut defines: Vec<(&str, String)> = Vec::new();
+        if let Some((layout, stack_size)) = bvh {
+            defines.push(("LAYOUT", layout.code().to_string()));
+            defines.push(("STACK_SIZE", stack_size.max(1).to_string()));
+        }
+        let kernels: &[KernelSource] = if sampling {
+            &[KernelSource::Trace, KernelSource::Sample]
+        } else {
+            &[KernelSource::Trace]
+        };
+        device.build_all(kernels, &defines)
     }
 
     /// Uploads the triangles (in file order) for the brute-force kernels.
@@ -98,6 +138,7 @@ impl<'d> ClTracer<'d> {
         program: &ocl::Program,
         triangles: &[Triangle],
     ) -> Result<Self> {
+        check_scene_memory(device, &[("triangles", size_of_val(triangles) as u64)])?;
         let scene = Scene {
             triangles: upload(device, triangles, "uploading triangles")?,
             count: triangles.len() as u32,
@@ -112,8 +153,47 @@ impl<'d> ClTracer<'d> {
         )
     }
 
-    /// Uploads the flat BVH for the BVH kernels.
+    /// Uploads a thesis-layout BVH for kernels compiled with [`ClTracer::compile_bvh`].
     pub fn bvh(device: &'d ClDevice, program: &ocl::Program, bvh: &FlatBvh) -> Result<Self> {
+        let mut t = Self::with_nodes(
+            device,
+            program,
+            bytemuck::cast_slice(&bvh.nodes),
+            &bvh.triangles,
+        )?;
+        t.layout = Some(Layout::Bin32);
+        Ok(t)
+    }
+
+    /// Uploads a BVH in any layout, for kernels compiled with its layout and stack size.
+    pub fn with_layout(
+        device: &'d ClDevice,
+        program: &ocl::Program,
+        layout: &DeviceLayout,
+    ) -> Result<Self> {
+        let mut t = Self::with_nodes(device, program, &layout.nodes, &layout.triangles)?;
+        t.layout = Some(layout.layout);
+        Ok(t)
+    }
+
+    /// The BVH's node layout, `None` for brute force.
+    pub fn layout(&self) -> Option<Layout> {
+        self.layout
+    }
+
+    fn with_nodes(
+        device: &'d ClDevice,
+        program: &ocl::Program,
+        nodes: &[u8],
+        triangles: &[Triangle],
+    ) -> Result<Self> {
+        check_scene_memory(
+            device,
+            &[
+                ("triangles", size_of_val(triangles) as u64),
+                ("BVH nodes", nodes.len() as u64),
+            ],
+        )?;
         let status = ocl::Buffer::<u32>::builder()
             .queue(device.queue.clone())
             .flags(ocl::flags::MEM_READ_WRITE)
@@ -121,10 +201,10 @@ impl<'d> ClTracer<'d> {
             .build()
             .map_err(|e| device.error("allocating the status flag", e))?;
         let scene = Scene {
-            triangles: upload(device, &bvh.triangles, "uploading triangles")?,
-            count: bvh.triangles.len() as u32,
+            triangles: upload(device, triangles, "uploading triangles")?,
+            count: triangles.len() as u32,
             bvh: Some(DeviceBvh {
-                nodes: upload(device, &bvh.nodes, "uploading BVH nodes")?,
+                nodes: upload(device, nodes, "uploading BVH nodes")?,
                 status,
             }),
         };
@@ -160,12 +240,244 @@ impl<'d> ClTracer<'d> {
             device,
             program: program.clone(),
             scene,
+            lights: None,
             primary,
             bands: BandPlanner {
                 rate: None,
                 first_band_pixels,
             },
+            sample_bands: BandPlanner {
+                rate: None,
+                first_band_pixels: first_band_pixels / 8,
+            },
+            image_budget: device
+                .info
+                .max_allocation
+                .min(device.info.global_memory / 8),
+            local: default_work_group(device),
+            layout: None,
         })
+    }
+
+    /// Sets the work-group shape (pixels across, down) of the kernels; `cltrace tune` finds
+    /// the best one per device. Shapes the device cannot run are refused.
+    pub fn set_work_group(&mut self, local: [usize; 2]) -> Result<()> {
+        let size = local[0] * local[1];
+        if size == 0 || size > self.device.info.max_work_group_size {
+            return Err(Error::Invalid(format!(
+                "work-group {}x{} does not fit {} (at most {} work-items)",
+                local[0], local[1], self.device.info.name, self.device.info.max_work_group_size
+            )));
+        }
+        self.local = local;
+        Ok(())
+    }
+
+    /// Caps the bytes of one output image below what the device allows, so that frames
+    /// are rendered and read back in bands of rows that fit (what a device with a small
+    /// largest allocation does anyway).
+    pub fn limit_image_bytes(&mut self, bytes: u64) {
+        self.image_budget = self.image_budget.min(bytes.max(1));
+    }
+
+    /// Uploads the materials (indexed by the triangles' `material`) and the emitters (indices
+    /// into this tracer's triangle order), which the shade modes need.
+    pub fn set_lights(&mut self, materials: &[Material], emitters: &Emitters) -> Result<()> {
+        let device = self.device;
+        // Buffers cannot be empty: a lone zero stands in for "no emitters".
+        let (list, cdf) = if emitters.is_empty() {
+            (vec![0u32], vec![1.0f32])
+        } else {
+            (emitters.triangles.clone(), emitters.cdf.clone())
+        };
+        self.lights = Some(DeviceLights {
+            materials: upload(device, materials, "uploading materials")?,
+            emitters: upload(device, &list, "uploading emitters")?,
+            cdf: upload(device, &cdf, "uploading emitters")?,
+            count: emitters.triangles.len() as u32,
+            area: emitters.total_area,
+        });
+        Ok(())
+    }
+
+    /// Adds the samples `samples` of every pixel to `accumulation`, with the kernels of
+    /// cl/sample.cl (the program must have been compiled with sampling). Launches cover bands
+    /// of rows, each about [`LAUNCH_TARGET_MS`]; a whole sample of the image is taken before
+    /// the next one where the accumulation image fits on the device, so that stopping early
+    /// (`stop` set, checked between launches) leaves every pixel with nearly the same number
+    /// of samples. `on_sample` is called after each finished sample with the number of
+    /// samples done and the rays traced so far (counted after the first, estimated after).
+    #[allow(clippy::too_many_arguments)]
+    pub fn render_samples(
+        &mut self,
+        camera: &Pinhole,
+        settings: &SampleSettings,
+        samples: std::ops::Range<u32>,
+        accumulation: &mut Accumulation,
+        stop: &std::sync::atomic::AtomicBool,
+        on_sample: &mut dyn FnMut(u32, u64),
+    ) -> Result<DeviceTimes> {
+        use std::sync::atomic::Ordering;
+        let device = self.device;
+        let (width, height) = (accumulation.width, accumulation.height);
+        let (w, h) = (width as usize, height as usize);
+        let name = match settings.lighting {
+            Lighting::Ao { .. } => "sample_ao",
+            Lighting::Shadow { .. } => "sample_shadow",
+            Lighting::Path { .. } => "sample_path",
+        };
+        if self.lights.is_none() {
+            self.set_lights(&[Material::default()], &Emitters::default())?;
+        }
+        let lights = self.lights.as_ref().expect("set above");
+        // 16 bytes of radiance and 4 of ray count a pixel.
+        let capacity = capacity::<Float4>(device, self.image_budget, w, h);
+        let accum = PitchedBuffer::<Float4>::new(device, w, capacity)?;
+        let pitch = accum.pitch;
+        let rays = ocl::Buffer::<u32>::builder()
+            .queue(device.queue.clone())
+            .flags(ocl::flags::MEM_READ_WRITE)
+            .len(pitch * capacity)
+            .build()
+            .map_err(|e| device.error("allocating the ray counts", e))?;
+
+        let (ao_samples, ao_distance, light, max_bounces) = match settings.lighting {
+            Lighting::Ao { samples, distance } => (samples, distance, Float4::zero(), 0),
+            Lighting::Shadow { light } => {
+                let l = match light {
+                    Light::Directional(d) => Float4::new(d.x, d.y, d.z, 0.0),
+                    Light::Point(p) => Float4::new(p.x, p.y, p.z, 1.0),
+                };
+                (0, 0.0, l, 0)
+            }
+            Lighting::Path { max_bounces } => (0, 0.0, Float4::zero(), max_bounces),
+        };
+        let f4 = |v: [f32; 4]| Float4::new(v[0], v[1], v[2], v[3]);
+        let mut builder = kernel_builder(device, &self.program, name, &self.scene);
+        builder
+            .arg(&lights.materials)
+            .arg(&lights.emitters)
+            .arg(&lights.cdf)
+            .arg(lights.count)
+            .arg(lights.area)
+            .arg(f4(camera.eye))
+            .arg(f4(camera.p0))
+            .arg(f4(camera.du))
+            .arg(f4(camera.dv))
+            .arg(width)
+            .arg(0u32)
+            .arg(0u32)
+            .arg(settings.offset)
+            .arg(settings.seed)
+            .arg(0u32)
+            .arg(ao_samples)
+            .arg(ao_distance)
+            .arg(light)
+            .arg(max_bounces)
+            .arg(&accum.buffer)
+            .arg(&rays)
+            .arg(pitch as u32);
+        let kernel = builder
+            .build()
+            .map_err(|e| device.error(&format!("creating the {name} kernel"), e))?;
+        // Argument positions after the scene's: row0, row_end, sample.
+        let base = self.scene.arg_count() + 5;
+        let (row0_arg, row_end_arg, sample_arg) = (base + 5, base + 6, base + 9);
+        let set = |i: u32, v: u32| {
+            kernel
+                .set_arg(i, v)
+                .map_err(|e| device.error(&format!("setting kernel argument {i}"), e))
+        };
+
+        self.scene.clear_status(device)?;
+        let local = self.local;
+        let mut times = DeviceTimes::default();
+        let mut host = vec![Float4::zero(); w * capacity];
+        let mut counts = vec![0u32; pitch * capacity];
+        let mut group0 = 0usize;
+        'groups: while group0 < h {
+            let group_rows = capacity.min(h - group0);
+            accum
+                .buffer
+                .cmd()
+                .fill(Float4::zero(), None)
+                .enq()
+                .map_err(|e| device.error("clearing the accumulation image", e))?;
+            rays.cmd()
+                .fill(0u32, None)
+                .enq()
+                .map_err(|e| device.error("clearing the ray counts", e))?;
+            // The accumulation image's row 0 is the group's first row; bands run inside it.
+            set(row0_arg, group0 as u32)?;
+            let mut stopped = false;
+            let mut rays_per_sample = None;
+            'samples: for (done, sample) in samples.clone().enumerate() {
+                set(sample_arg, sample)?;
+                let mut y0 = group0;
+                while y0 < group0 + group_rows {
+                    let rows = self.sample_bands.next_rows(w, group0 + group_rows - y0);
+                    set(row_end_arg, (y0 + rows) as u32)?;
+                    let global = [
+                        w.div_ceil(local[0]) * local[0],
+                        rows.div_ceil(local[1]) * local[1],
+                    ];
+                    let ms = launch(
+                        device,
+                        kernel
+                            .cmd()
+                            .global_work_offset([0, y0])
+                            .global_work_size(global)
+                            .local_work_size(local),
+                    )?;
+                    times.kernel_ms += ms;
+                    times.launches += 1;
+                    self.sample_bands.learn(rows * w, ms);
+                    y0 += rows;
+                    if stop.load(Ordering::Relaxed) {
+                        stopped = true;
+                        break 'samples;
+                    }
+                }
+                if group_rows == h {
+                    let per_sample = match rays_per_sample {
+                        Some(n) => n,
+                        None => {
+                            rays.read(&mut counts[..pitch * group_rows])
+                                .enq()
+                                .map_err(|e| device.error("reading the ray counts back", e))?;
+                            let n = counts.iter().map(|&c| c as u64).sum::<u64>();
+                            *rays_per_sample.insert(n)
+                        }
+                    };
+                    on_sample(done as u32 + 1, per_sample * (done as u64 + 1));
+                }
+            }
+            let start = Instant::now();
+            accum.read_rows(device, group_rows, &mut host)?;
+            rays.read(&mut counts[..pitch * group_rows])
+                .enq()
+                .map_err(|e| device.error("reading the ray counts back", e))?;
+            times.read_back_ms += start.elapsed().as_secs_f64() * 1e3;
+            for (row, chunk) in host[..w * group_rows].chunks(w).enumerate() {
+                let out = &mut accumulation.pixels[(group0 + row) * w..(group0 + row + 1) * w];
+                for (o, v) in out.iter_mut().zip(chunk) {
+                    o[0] += v[0];
+                    o[1] += v[1];
+                    o[2] += v[2];
+                    o[3] += v[3];
+                }
+                accumulation.rays += counts[row * pitch..row * pitch + w]
+                    .iter()
+                    .map(|&c| c as u64)
+                    .sum::<u64>();
+            }
+            self.scene.check_status(device)?;
+            group0 += group_rows;
+            if stopped {
+                break 'groups;
+            }
+        }
+        Ok(times)
     }
 
     /// Renders one frame. `progress` shows a bar on stderr when the render looks long.
@@ -179,7 +491,7 @@ impl<'d> ClTracer<'d> {
     ) -> Result<(Frame, DeviceTimes)> {
         let device = self.device;
         let (w, h) = (width as usize, height as usize);
-        let band_capacity = band_capacity(device, w, h);
+        let band_capacity = capacity::<Hit>(device, self.image_budget, w, h);
         let hits = PitchedBuffer::<Hit>::new(device, w, band_capacity)?;
         let colors = PitchedBuffer::<u32>::new(device, w, band_capacity)?;
 
@@ -203,7 +515,7 @@ impl<'d> ClTracer<'d> {
         set(a + 13, k.set_arg(a + 13, colors.pitch as u32))?;
         self.scene.clear_status(device)?;
 
-        let local = local_size(device);
+        let local = self.local;
         let mut frame = Frame::new(width, height);
         let mut times = DeviceTimes::default();
         let mut bar: Option<ProgressBar> = None;
@@ -263,9 +575,20 @@ impl<'d> ClTracer<'d> {
     /// Traces arbitrary rays: the closest hit of each in `(0, t_max)`, or with `any_hit`
     /// any hit there. Hits name triangles in file order; `t` is the distance along the ray.
     pub fn trace_rays(&mut self, rays: &[Ray], t_max: f32, any_hit: bool) -> Result<Vec<Hit>> {
+        Ok(self.trace_rays_timed(rays, t_max, any_hit)?.0)
+    }
+
+    /// [`ClTracer::trace_rays`] with the kernel's device time and the read-back's wall time
+    /// (the upload of the rays is in neither).
+    pub fn trace_rays_timed(
+        &mut self,
+        rays: &[Ray],
+        t_max: f32,
+        any_hit: bool,
+    ) -> Result<(Vec<Hit>, DeviceTimes)> {
         let device = self.device;
         if rays.is_empty() {
-            return Ok(Vec::new());
+            return Ok((Vec::new(), DeviceTimes::default()));
         }
         let packed: Vec<Float4> = rays
             .iter()
@@ -288,20 +611,29 @@ impl<'d> ClTracer<'d> {
             .arg(&input)
             .arg(rays.len() as u32)
             .arg(any_hit as i32)
-            .arg(&output)
-            .global_work_size(rays.len());
+            .arg(&output);
+        let local = self.local[0] * self.local[1];
+        builder
+            .global_work_size(rays.len().div_ceil(local) * local)
+            .local_work_size(local);
         let kernel = builder
             .build()
             .map_err(|e| device.error("creating the trace_rays kernel", e))?;
         self.scene.clear_status(device)?;
-        launch(device, kernel.cmd())?;
+        let kernel_ms = launch(device, kernel.cmd())?;
+        let start = Instant::now();
         let mut hits = vec![Hit::NONE; rays.len()];
         output
             .read(&mut hits)
             .enq()
             .map_err(|e| device.error("reading hits back", e))?;
+        let times = DeviceTimes {
+            kernel_ms,
+            read_back_ms: start.elapsed().as_secs_f64() * 1e3,
+            launches: 1,
+        };
         self.scene.check_status(device)?;
-        Ok(hits)
+        Ok((hits, times))
     }
 }
 
@@ -386,19 +718,43 @@ fn upload<T: ocl::OclPrm>(device: &ClDevice, data: &[T], doing: &str) -> Result<
         .map_err(|e| device.error(doing, e))
 }
 
-/// Rows the output images hold: the whole frame where the device allows, else as many
-/// rows as fit in its largest allocation and an eighth of its memory.
-fn band_capacity(device: &ClDevice, width: usize, height: usize) -> usize {
-    let row_bytes = PitchedBuffer::<Hit>::pitch_bytes_for(device, width) as u64;
-    let limit = device
-        .info
-        .max_allocation
-        .min(device.info.global_memory / 8);
-    ((limit / row_bytes) as usize).clamp(1, height)
+/// Checks, before anything is uploaded, that each of the scene's buffers fits in one device
+/// allocation and that together (with a row of output) they fit in the device's memory.
+fn check_scene_memory(device: &ClDevice, buffers: &[(&str, u64)]) -> Result<()> {
+    let info = &device.info;
+    let mib = |b: u64| b.div_ceil(1 << 20);
+    let total: u64 = buffers.iter().map(|b| b.1).sum();
+    let largest = buffers
+        .iter()
+        .max_by_key(|b| b.1)
+        .copied()
+        .unwrap_or(("", 0));
+    let parts: Vec<String> = buffers
+        .iter()
+        .map(|(n, b)| format!("{n} {} MiB", mib(*b)))
+        .collect();
+    if largest.1 > info.max_allocation || total + (1 << 20) > info.global_memory {
+        return Err(Error::Device(format!(
+            "the scene needs {} MiB on {} ({}), but the device has {} MiB of global memory and allocates at most {} MiB at once",
+            mib(total),
+            info.name,
+            parts.join(", "),
+            mib(info.global_memory),
+            mib(info.max_allocation)
+        )));
+    }
+    Ok(())
 }
 
-/// Work-group shape: 8 x 8 pixel tiles keep neighbouring rays together.
-fn local_size(device: &ClDevice) -> [usize; 2] {
+/// Rows of a `width`-wide pitched image of `T` that fit in `budget` bytes: the whole
+/// frame where they all fit, at least one.
+fn capacity<T: ocl::OclPrm>(device: &ClDevice, budget: u64, width: usize, height: usize) -> usize {
+    let row_bytes = PitchedBuffer::<T>::pitch_bytes_for(device, width) as u64;
+    ((budget / row_bytes) as usize).clamp(1, height)
+}
+
+/// The work-group shape before tuning: 8 x 8 pixel tiles keep neighbouring rays together.
+fn default_work_group(device: &ClDevice) -> [usize; 2] {
     if device.info.max_work_group_size >= 64 {
         [8, 8]
     } else {

@@ -1,21 +1,35 @@
 //! The four methods behind one face: [`Renderer::prepare`] does the per-scene work (BVH
-//! build and layout, kernel compilation, upload), [`Renderer::render`] traces frames.
+//! build and layout, kernel compilation, upload), then [`Renderer::render`] traces primary
+//! frames, [`Renderer::render_samples`] accumulates the progressive shade modes and
+//! [`Renderer::trace_rays`] traces arbitrary rays.
+
+use std::sync::atomic::AtomicBool;
 
 use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
 
+use super::integrator::{self, Accumulation, Emitters, SampleSettings};
 use super::opencl::ClTracer;
-use super::{Frame, Method, ShadeParams, cpu};
+use super::{Frame, Hit, Method, ShadeParams, cpu};
 use crate::bvh::{BuildOptions, Bvh, BvhStats};
 use crate::camera::Camera;
 use crate::device::ClDevice;
 use crate::error::Result;
-use crate::layout::{BvhNode, FlatBvh, Triangle, triangles_in_order};
+use crate::geometry::Ray;
+use crate::layout::{
+    BvhNode, DeviceLayout, FlatBvh, Layout, Triangle, assign_materials, triangles_in_order,
+};
+use crate::material::{Material, Materials};
 use crate::mesh::Mesh;
 use crate::report::Timings;
 
 /// A method made ready for one mesh (on one device, for the OpenCL methods).
 pub struct Renderer<'d> {
     tracer: Tracer<'d>,
+    /// The materials, indexed by the triangles' `material`.
+    materials: Vec<Material>,
+    /// The emitting triangles, as indices into the tracer's triangle order.
+    emitters: Emitters,
     /// The BVH's statistics, for the BVH methods.
     pub bvh: Option<BvhStats>,
     /// Bytes of scene data the tracer reads (triangles, and nodes for a BVH).
@@ -28,78 +42,130 @@ enum Tracer<'d> {
     Cl(Box<ClTracer<'d>>),
 }
 
-/// What tracing one frame cost.
+/// How [`Renderer::prepare`] readies a method.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PrepareOptions {
+    /// How the BVH methods build their tree.
+    pub build: BuildOptions,
+    /// The node layout `cl-bvh` uploads (the host methods always use the thesis's); `None`
+    /// takes the device's tuned one, else its default ([`crate::tune::default_layout`]).
+    pub layout: Option<Layout>,
+    /// Also compile the progressive shade modes (OpenCL methods).
+    pub sampling: bool,
+}
+
+/// What tracing cost.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct TraceTimes {
     /// Device time of the kernel launches (OpenCL) or wall time of the trace (CPU), ms.
     pub trace_ms: f64,
-    /// Host wall time of reading the images back (OpenCL only), ms.
+    /// Host wall time of reading results back (OpenCL only), ms.
     pub read_back_ms: f64,
 }
 
 impl<'d> Renderer<'d> {
-    /// Builds and lays out the BVH (stages "build", "layout"), compiles the kernel
+    /// Builds and lays out the BVH (stages "build", "layout"), compiles the kernels
     /// ("compile") and uploads the scene ("upload"), as `method` needs, into `timings`.
     /// OpenCL methods need `device`.
     pub fn prepare(
         method: Method,
         mesh: &Mesh,
-        build: &BuildOptions,
+        materials: &Materials,
+        options: &PrepareOptions,
         device: Option<&'d ClDevice>,
         timings: &mut Timings,
     ) -> Result<Self> {
-        let (flat, bvh) = if method.uses_bvh() {
+        let (build, sampling) = (&options.build, options.sampling);
+        let (flat, mut bvh) = if method.uses_bvh() {
             let bvh = timings.time("build", || Bvh::build(mesh, build));
             let stats = bvh.stats();
-            (
-                Some(timings.time("layout", || FlatBvh::new(bvh, mesh))),
-                Some(stats),
-            )
+            let mut flat = timings.time("layout", || FlatBvh::new(bvh, mesh));
+            assign_materials(&mut flat.triangles, materials);
+            (Some(flat), Some(stats))
         } else {
             (None, None)
         };
-        let all = || triangles_in_order(mesh, 0..mesh.triangle_count() as u32);
+        let all = || {
+            let mut t = triangles_in_order(mesh, 0..mesh.triangle_count() as u32);
+            assign_materials(&mut t, materials);
+            t
+        };
         let bytes =
             |nodes: usize, tris: usize| nodes * size_of::<BvhNode>() + tris * size_of::<Triangle>();
         let device = || device.expect("OpenCL methods are given a device");
-        let (tracer, scene_bytes) = match (method, flat) {
+        let (tracer, scene_bytes, emitters) = match (method, flat) {
             (Method::CpuBrute, _) => {
                 let triangles = all();
+                let emitters = Emitters::new(&triangles, &materials.list);
                 let n = triangles.len();
-                (Tracer::CpuBrute(cpu::BruteForce { triangles }), bytes(0, n))
+                (
+                    Tracer::CpuBrute(cpu::BruteForce { triangles }),
+                    bytes(0, n),
+                    emitters,
+                )
             }
             (Method::CpuBvh, Some(flat)) => {
+                let emitters = Emitters::new(&flat.triangles, &materials.list);
                 let b = bytes(flat.nodes.len(), flat.triangles.len());
-                (Tracer::CpuBvh(flat), b)
+                (Tracer::CpuBvh(flat), b, emitters)
             }
             (Method::ClBrute, _) => {
                 let device = device();
-                let program = timings.time("compile", || ClTracer::compile_brute(device))?;
+                let program =
+                    timings.time("compile", || ClTracer::compile(device, None, sampling))?;
                 let triangles = all();
-                let tracer =
-                    timings.time("upload", || ClTracer::brute(device, &program, &triangles))?;
-                (Tracer::Cl(Box::new(tracer)), bytes(0, triangles.len()))
+                let emitters = Emitters::new(&triangles, &materials.list);
+                let tracer = timings.time("upload", || -> Result<ClTracer> {
+                    let mut t = ClTracer::brute(device, &program, &triangles)?;
+                    t.set_lights(&materials.list, &emitters)?;
+                    Ok(t)
+                })?;
+                (
+                    Tracer::Cl(Box::new(tracer)),
+                    bytes(0, triangles.len()),
+                    emitters,
+                )
             }
             (Method::ClBvh, Some(flat)) => {
                 let device = device();
-                let program =
-                    timings.time("compile", || ClTracer::compile_bvh(device, flat.depth))?;
-                let tracer = timings.time("upload", || ClTracer::bvh(device, &program, &flat))?;
-                (
-                    Tracer::Cl(Box::new(tracer)),
-                    bytes(flat.nodes.len(), flat.triangles.len()),
-                )
+                let emitters = Emitters::new(&flat.triangles, &materials.list);
+                let sah = bvh.map_or(0.0, |s| s.sah_cost);
+                let tuned = crate::tune::cached(&device.info);
+                let layout = options
+                    .layout
+                    .or(tuned.as_ref().map(|t| t.layout))
+                    .unwrap_or_else(|| crate::tune::default_layout(&device.info));
+                let laid = timings.time("layout", || DeviceLayout::new(flat, layout, sah));
+                let program = timings.time("compile", || {
+                    ClTracer::compile(device, Some((laid.layout, laid.stack_size)), sampling)
+                })?;
+                let tracer = timings.time("upload", || -> Result<ClTracer> {
+                    let mut t = ClTracer::with_layout(device, &program, &laid)?;
+                    t.set_lights(&materials.list, &emitters)?;
+                    if let Some(tuning) = &tuned {
+                        // A cache that no longer fits the device is ignored, not fatal.
+                        let _ = t.set_work_group(tuning.work_group);
+                    }
+                    Ok(t)
+                })?;
+                let b = laid.nodes.len() + laid.triangles.len() * size_of::<Triangle>();
+                if let Some(s) = bvh.as_mut() {
+                    s.sah_cost = laid.sah_cost;
+                }
+                (Tracer::Cl(Box::new(tracer)), b, emitters)
             }
             (Method::CpuBvh | Method::ClBvh, None) => unreachable!("BVH methods build a BVH above"),
         };
         Ok(Renderer {
             tracer,
+            materials: materials.list.clone(),
+            emitters,
             bvh,
             scene_bytes,
         })
     }
 
-    /// Traces one frame. With `progress`, a long render shows a bar on stderr.
+    /// Traces one frame of primary rays. With `progress`, a long render shows a bar.
     pub fn render(
         &mut self,
         camera: &Camera,
@@ -109,16 +175,7 @@ impl<'d> Renderer<'d> {
         let (w, h) = (camera.width, camera.height);
         let pixels = w as u64 * h as u64;
         let cpu_trace = |tracer: &dyn Fn(Option<&ProgressBar>) -> Frame, long: bool| {
-            let bar = (progress && long).then(|| {
-                ProgressBar::new(h as u64)
-                    .with_style(
-                        ProgressStyle::with_template(
-                            "{msg} [{bar:30}] {pos}/{len} rows, {eta} left",
-                        )
-                        .expect("valid template"),
-                    )
-                    .with_message("tracing on the CPU")
-            });
+            let bar = (progress && long).then(|| rows_bar(h as u64, "tracing on the CPU"));
             let start = std::time::Instant::now();
             let frame = tracer(bar.as_ref());
             if let Some(b) = bar {
@@ -141,14 +198,182 @@ impl<'d> Renderer<'d> {
             ),
             Tracer::Cl(t) => {
                 let (frame, times) = t.render(&camera.pinhole(), w, h, shade, progress)?;
+                let times = TraceTimes {
+                    trace_ms: times.kernel_ms,
+                    read_back_ms: times.read_back_ms,
+                };
+                (frame, times)
+            }
+        })
+    }
+
+    /// Adds samples `samples` of every pixel to `accumulation` (as large as the camera's
+    /// image), in the progressive mode `settings` names. `stop`, once set, ends the work
+    /// early; each pixel keeps the samples it got. With `progress`, a bar shows samples
+    /// and Mrays/s.
+    pub fn render_samples(
+        &mut self,
+        camera: &Camera,
+        settings: &SampleSettings,
+        samples: std::ops::Range<u32>,
+        accumulation: &mut Accumulation,
+        stop: &AtomicBool,
+        progress: bool,
+    ) -> Result<TraceTimes> {
+        let bar = progress.then(|| {
+            ProgressBar::new(samples.len() as u64).with_style(
+                ProgressStyle::with_template(
+                    "sampling [{bar:30}] {pos}/{len} samples, {msg}, {eta} left",
+                )
+                .expect("valid template"),
+            )
+        });
+        let start = std::time::Instant::now();
+        let rays_before = accumulation.rays;
+        let pinhole = camera.pinhole();
+        let times = match &mut self.tracer {
+            Tracer::Cl(t) => {
+                let device = t.render_samples(
+                    &pinhole,
+                    settings,
+                    samples.clone(),
+                    accumulation,
+                    stop,
+                    &mut |done, rays| {
+                        if let Some(b) = &bar {
+                            b.set_position(done as u64);
+                            b.set_message(mrays(start, rays));
+                        }
+                    },
+                )?;
+                TraceTimes {
+                    trace_ms: device.kernel_ms,
+                    read_back_ms: device.read_back_ms,
+                }
+            }
+            tracer => {
+                for s in samples {
+                    if stop.load(std::sync::atomic::Ordering::Relaxed) {
+                        break;
+                    }
+                    let (materials, emitters) = (&self.materials, &self.emitters);
+                    match &*tracer {
+                        Tracer::CpuBrute(t) => integrator::render_samples(
+                            t,
+                            materials,
+                            emitters,
+                            &pinhole,
+                            camera.width,
+                            settings,
+                            s..s + 1,
+                            accumulation,
+                            stop,
+                        ),
+                        Tracer::CpuBvh(t) => integrator::render_samples(
+                            t,
+                            materials,
+                            emitters,
+                            &pinhole,
+                            camera.width,
+                            settings,
+                            s..s + 1,
+                            accumulation,
+                            stop,
+                        ),
+                        Tracer::Cl(_) => unreachable!("handled above"),
+                    }
+                    if let Some(b) = &bar {
+                        b.inc(1);
+                        b.set_message(mrays(start, accumulation.rays - rays_before));
+                    }
+                }
+                TraceTimes {
+                    trace_ms: start.elapsed().as_secs_f64() * 1e3,
+                    read_back_ms: 0.0,
+                }
+            }
+        };
+        if let Some(b) = bar {
+            b.finish_and_clear();
+        }
+        Ok(times)
+    }
+
+    /// The node layout the OpenCL BVH tracer uses (`None` for the other methods).
+    pub fn layout(&self) -> Option<Layout> {
+        match &self.tracer {
+            Tracer::Cl(t) => t.layout(),
+            _ => None,
+        }
+    }
+
+    /// Sets the OpenCL kernels' work-group shape (ignored by the host methods).
+    pub fn set_work_group(&mut self, shape: [usize; 2]) -> Result<()> {
+        match &mut self.tracer {
+            Tracer::Cl(t) => t.set_work_group(shape),
+            _ => Ok(()),
+        }
+    }
+
+    /// Traces arbitrary rays (closest hits in `(0, t_max)`, or any hits), as the bench's
+    /// secondary ray kinds do.
+    pub fn trace_rays(
+        &mut self,
+        rays: &[Ray],
+        t_max: f32,
+        any_hit: bool,
+    ) -> Result<(Vec<Hit>, TraceTimes)> {
+        fn host(
+            tracer: &impl cpu::ClosestHit,
+            rays: &[Ray],
+            t_max: f32,
+            any_hit: bool,
+        ) -> Vec<Hit> {
+            rays.par_iter()
+                .with_min_len(1024)
+                .map(|ray| match tracer.trace(ray, t_max, any_hit) {
+                    None => Hit::NONE,
+                    Some((i, t)) => Hit {
+                        prim: tracer.triangles()[i].prim,
+                        t: t * ray.dir.length(),
+                    },
+                })
+                .collect()
+        }
+        let start = std::time::Instant::now();
+        let host_times = |start: std::time::Instant| TraceTimes {
+            trace_ms: start.elapsed().as_secs_f64() * 1e3,
+            read_back_ms: 0.0,
+        };
+        Ok(match &mut self.tracer {
+            Tracer::CpuBrute(t) => (host(t, rays, t_max, any_hit), host_times(start)),
+            Tracer::CpuBvh(t) => (host(t, rays, t_max, any_hit), host_times(start)),
+            Tracer::Cl(t) => {
+                let (hits, device) = t.trace_rays_timed(rays, t_max, any_hit)?;
                 (
-                    frame,
+                    hits,
                     TraceTimes {
-                        trace_ms: times.kernel_ms,
-                        read_back_ms: times.read_back_ms,
+                        trace_ms: device.kernel_ms,
+                        read_back_ms: device.read_back_ms,
                     },
                 )
             }
         })
     }
+}
+
+fn mrays(start: std::time::Instant, rays: u64) -> String {
+    format!(
+        "{:.1} Mrays/s",
+        rays as f64 / start.elapsed().as_secs_f64() / 1e6
+    )
+}
+
+fn rows_bar(rows: u64, message: &'static str) -> ProgressBar {
+    ProgressBar::new(rows)
+        .with_style(
+            ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} rows, {eta} left")
+                .expect("valid template"),
+        )
+        .with_message(message)
 }

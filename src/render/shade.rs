@@ -42,7 +42,7 @@ impl ShadeParams {
                 let g = 1.0 - (distance - self.near) / (self.far - self.near);
                 pack_rgba(g, g, g)
             }
-            Shade::Lambert => {
+            Shade::Lambert | Shade::Ao | Shade::Shadow | Shade::Path => {
                 let d_len = (dir.x * dir.x + dir.y * dir.y + dir.z * dir.z).sqrt();
                 let c = (n.x * dir.x + n.y * dir.y + n.z * dir.z).abs() / d_len;
                 pack_rgba(c, c, c)
@@ -62,4 +62,47 @@ fn quantize(v: f32) -> u32 {
 
 fn pack_rgba(r: f32, g: f32, b: f32) -> u32 {
     quantize(r) | (quantize(g) << 8) | (quantize(b) << 16) | (255 << 24)
+}
+
+/// Display colours for linear radiance: for `path`, the ACES filmic curve as fitted by
+/// Narkowicz (2015), for the other modes (already within [0, 1]) a clamp; then the sRGB
+/// transfer function and 8-bit rounding.
+pub fn tone_map(radiance: &[[f32; 3]], shade: Shade) -> Vec<u32> {
+    let curve = |x: f32| match shade {
+        Shade::Path => {
+            let x = x.max(0.0);
+            (x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)
+        }
+        _ => x,
+    };
+    let srgb = |x: f32| {
+        let x = x.clamp(0.0, 1.0);
+        if x <= 0.003_130_8 {
+            12.92 * x
+        } else {
+            1.055 * x.powf(1.0 / 2.4) - 0.055
+        }
+    };
+    radiance
+        .iter()
+        .map(|&[r, g, b]| pack_rgba(srgb(curve(r)), srgb(curve(g)), srgb(curve(b))))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tone_mapping_ends_in_srgb_bytes() {
+        let c = tone_map(&[[0.0; 3], [1.0; 3], [0.5, 0.2, 0.0]], Shade::Ao);
+        assert_eq!(c[0].to_le_bytes(), [0, 0, 0, 255]);
+        assert_eq!(c[1].to_le_bytes(), [255, 255, 255, 255]);
+        assert_eq!(c[2].to_le_bytes()[0], 188); // sRGB(0.5) = 0.7354
+        let p = tone_map(&[[1e6; 3]], Shade::Path);
+        assert!(
+            p[0].to_le_bytes()[0] >= 254,
+            "the filmic curve approaches white"
+        );
+    }
 }

@@ -1,0 +1,146 @@
+/* sample.cl: the progressive shade modes, one sample per pixel per launch, added to a
+ * pitched float4 accumulation image (radiance sums, and the sample count in w). Mirrors
+ * src/render/integrator.rs. Compiled, like trace.cl, against the BVH or every triangle. */
+#include "cltrace.h"
+
+#define SHADOW_AMBIENT 0.1f
+#define ROULETTE_AFTER 3u
+
+/* What the shade modes read besides the geometry: materials, and the emitting triangles
+ * (indices into tris) with the cumulative distribution of their areas. */
+#define LIGHT_PARAMS __global const Material* materials, __global const uint* emitters, \
+    __global const float* emitter_cdf, uint emitter_count, float emitter_area
+
+/* Every sample kernel takes the same arguments; each mode reads the ones it needs. The
+ * launch covers rows [global offset, row_end); the accumulation image's row 0 is row0. */
+#define SAMPLE_PARAMS SCENE_PARAMS, LIGHT_PARAMS, \
+    float4 eye, float4 p0, float4 du, float4 dv, uint width, uint row0, uint row_end, \
+    float offset, uint seed, uint sample, \
+    uint ao_samples, float ao_distance, float4 light, uint max_bounces, \
+    __global float4* accum, __global uint* rays, uint accum_pitch
+
+inline void add_sample(__global float4* accum, __global uint* rays, uint accum_pitch,
+                       uint x, uint row, float3 radiance, uint ray_count) {
+    uint i = row * accum_pitch + x;
+    accum[i] += (float4)(radiance, 1.0f);
+    rays[i] += ray_count;
+}
+
+inline bool occluded(SCENE_PARAMS, float3 org, float3 dir, float t_max) {
+    float t;
+    return trace(SCENE, org, dir, t_max, true, &t) != MISS;
+}
+
+__kernel void sample_ao(SAMPLE_PARAMS) {
+    uint x = get_global_id(0), y = get_global_id(1);
+    if (x >= width || y < row0 || y >= row_end) return;
+    uint key = sampler_key(seed, y * width + x, sample);
+    float3 dir = jittered_ray(p0, du, dv, x, y, key);
+    float t;
+    uint hit = trace(SCENE, eye.xyz, dir, INFINITY, false, &t);
+    float3 radiance = (float3)(0.0f);
+    uint count = 1;
+    if (hit != MISS) {
+        float3 n = facing_normal(&tris[hit], dir);
+        float3 origin = eye.xyz + dir * t + n * offset;
+        uint open = 0;
+        for (uint k = 0; k < ao_samples; ++k) {
+            float3 d = cosine_direction(n, sample_1d(key, bounce_dim(0) + 2 * k), sample_1d(key, bounce_dim(0) + 2 * k + 1));
+            open += !occluded(SCENE, origin, d, ao_distance);
+        }
+        count += ao_samples;
+        radiance = (float3)((float)open / (float)max(ao_samples, 1u));
+    }
+    add_sample(accum, rays, accum_pitch, x, y - row0, radiance, count);
+}
+
+__kernel void sample_shadow(SAMPLE_PARAMS) {
+    uint x = get_global_id(0), y = get_global_id(1);
+    if (x >= width || y < row0 || y >= row_end) return;
+    uint key = sampler_key(seed, y * width + x, sample);
+    float3 dir = jittered_ray(p0, du, dv, x, y, key);
+    float t;
+    uint hit = trace(SCENE, eye.xyz, dir, INFINITY, false, &t);
+    float3 radiance = (float3)(0.0f);
+    uint count = 1;
+    if (hit != MISS) {
+        const __global Material* m = &materials[tris[hit].material];
+        float3 n = facing_normal(&tris[hit], dir);
+        float3 origin = eye.xyz + dir * t + n * offset;
+        /* light.w: 0 for a direction towards the light, 1 for the light's position. */
+        float3 l = light.w == 0.0f ? normalize(light.xyz) : normalize(light.xyz - origin);
+        float reach = light.w == 0.0f ? INFINITY : length(light.xyz - origin);
+        float c = dot(n, l);
+        float direct = 0.0f;
+        if (c > 0.0f) {
+            count += 1;
+            if (!occluded(SCENE, origin, l, reach)) direct = c;
+        }
+        radiance = load3(m->albedo) * (SHADOW_AMBIENT + (1.0f - SHADOW_AMBIENT) * direct) + load3(m->emission);
+    }
+    add_sample(accum, rays, accum_pitch, x, y - row0, radiance, count);
+}
+
+/* The emitter whose CDF interval holds u. */
+inline uint pick_emitter(__global const float* cdf, uint count, float u) {
+    uint lo = 0, hi = count - 1;
+    while (lo < hi) {
+        uint mid = (lo + hi) / 2;
+        if (u < cdf[mid]) hi = mid; else lo = mid + 1;
+    }
+    return lo;
+}
+
+__kernel void sample_path(SAMPLE_PARAMS) {
+    uint x = get_global_id(0), y = get_global_id(1);
+    if (x >= width || y < row0 || y >= row_end) return;
+    uint key = sampler_key(seed, y * width + x, sample);
+    float3 org = eye.xyz;
+    float3 dir = jittered_ray(p0, du, dv, x, y, key);
+    float3 radiance = (float3)(0.0f), throughput = (float3)(1.0f);
+    uint count = 1;
+    float t;
+    uint hit = trace(SCENE, org, dir, INFINITY, false, &t);
+    for (uint bounce = 0;; ++bounce) {
+        if (hit == MISS) {
+            if (emitter_count == 0) radiance += throughput * sky(dir);
+            break;
+        }
+        const __global Triangle* tri = &tris[hit];
+        const __global Material* m = &materials[tri->material];
+        float3 n = facing_normal(tri, dir);
+        /* Later bounces reach emitters through next-event estimation instead. */
+        if (bounce == 0) radiance += throughput * load3(m->emission);
+        float3 origin = org + dir * t + n * offset;
+        float3 albedo = load3(m->albedo);
+        uint d = bounce_dim(bounce);
+        if (emitter_count > 0) {
+            const __global Triangle* e = &tris[emitters[pick_emitter(emitter_cdf, emitter_count, sample_1d(key, d))]];
+            float3 q = triangle_point(load3(e->v0), load3(e->v1), load3(e->v2), sample_1d(key, d + 1), sample_1d(key, d + 2));
+            float3 w = q - origin;
+            float d2 = dot(w, w);
+            float3 l = w / sqrt(d2);
+            float cos_here = dot(n, l);
+            float cos_there = dot(facing_normal(e, l), -l);
+            if (cos_here > 0.0f && cos_there > 0.0f) {
+                count += 1;
+                if (!occluded(SCENE, origin, l, sqrt(d2) * (1.0f - 1e-4f))) {
+                    radiance += throughput * albedo / M_PI_F * load3(materials[e->material].emission)
+                                * (cos_here * cos_there / d2 * emitter_area);
+                }
+            }
+        }
+        if (bounce == max_bounces) break;
+        throughput *= albedo;
+        if (bounce >= ROULETTE_AFTER) {
+            float keep = fmin(fmax(fmax(throughput.x, throughput.y), throughput.z), 0.95f);
+            if (sample_1d(key, d + 3) >= keep) break;
+            throughput /= keep;
+        }
+        org = origin;
+        dir = cosine_direction(n, sample_1d(key, d + 4), sample_1d(key, d + 5));
+        count += 1;
+        hit = trace(SCENE, org, dir, INFINITY, false, &t);
+    }
+    add_sample(accum, rays, accum_pitch, x, y - row0, radiance, count);
+}

@@ -1,0 +1,103 @@
+//! Materials of an OBJ file from its MTL library, through `tobj`: the diffuse colour `Kd`
+//! and the emitted radiance `Ke` of each material, mapped onto the triangles.
+
+use std::path::Path;
+
+use crate::material::{Material, Materials};
+
+/// Reads the material library `name` (as an OBJ's `mtllib` names it) beside `obj`.
+pub(super) fn load_library(obj: &Path, name: &Path) -> tobj::MTLLoadResult {
+    let folder = obj.parent().unwrap_or(Path::new(""));
+    tobj::load_mtl(folder.join(name))
+}
+
+/// Our material for a tobj one: `Kd` as albedo (clamped to [0, 1]), `Ke` as emission. A
+/// library without `Ke` that gives a material an ambient colour above 1 (the Cornell box of
+/// Embree's samples writes its light as `Ka 20 20 20`) has that read as emission.
+pub(super) fn convert(m: &tobj::Material) -> Material {
+    let albedo = m
+        .diffuse
+        .map(|kd| {
+            kd.map(|c| {
+                if c.is_finite() {
+                    c.clamp(0.0, 1.0)
+                } else {
+                    0.0
+                }
+            })
+        })
+        .unwrap_or(crate::material::DEFAULT_ALBEDO);
+    let emission = match (m.emissive, m.ambient) {
+        (Some(ke), _) => ke,
+        (None, Some(ka)) if ka.iter().any(|&c| c > 1.0) => ka,
+        _ => [0.0; 3],
+    };
+    let emission = emission.map(|c| if c.is_finite() { c.max(0.0) } else { 0.0 });
+    Material::emitting(albedo, emission)
+}
+
+/// The per-triangle materials of the models (in file order, `triangles[i]` triangles each)
+/// given tobj's material list: index 0 is the default grey, then the library's materials.
+/// Returns a warning when the file names a library that could not be read.
+pub(super) fn assign(
+    models: &[tobj::Model],
+    library: Result<Vec<tobj::Material>, tobj::LoadError>,
+    obj: &Path,
+) -> (Materials, Option<String>) {
+    let (list, warning) = match library {
+        Ok(list) => (list, None),
+        // tobj reports an error only when an `mtllib` was named and none could be read.
+        Err(e) => (
+            Vec::new(),
+            Some(format!(
+                "{}: cannot read its material library ({e}): the mesh is grey",
+                obj.display()
+            )),
+        ),
+    };
+    if list.is_empty() {
+        return (Materials::default(), warning);
+    }
+    let mut materials = vec![Material::default()];
+    materials.extend(list.iter().map(convert));
+    let per_triangle = models
+        .iter()
+        .flat_map(|m| {
+            let id = m
+                .mesh
+                .material_id
+                .filter(|&i| i < list.len())
+                .map_or(0, |i| i as u32 + 1);
+            std::iter::repeat_n(id, m.mesh.indices.len() / 3)
+        })
+        .collect();
+    (
+        Materials {
+            list: materials,
+            per_triangle,
+        },
+        warning,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn kd_and_ke_and_the_ambient_convention() {
+        let mut m = tobj::Material {
+            diffuse: Some([0.5, 2.0, -1.0]),
+            emissive: Some([3.0, 0.0, 1.0]),
+            ..Default::default()
+        };
+        let c = convert(&m);
+        assert_eq!(c.albedo, [0.5, 1.0, 0.0]);
+        assert_eq!(c.emission, [3.0, 0.0, 1.0]);
+        m.emissive = None;
+        m.ambient = Some([20.0, 20.0, 20.0]);
+        assert_eq!(convert(&m).emission, [20.0; 3]);
+        m.ambient = Some([0.2, 0.2, 0.2]);
+        assert!(!convert(&m).emits());
+    }
+}

@@ -1,0 +1,78 @@
+//! The Aila–Laine binary layout ("Understanding the Efficiency of Ray Traversal on GPUs",
+//! 2009): each node holds both of its children's boxes, so that one 64-byte fetch tests two
+//! children, where the thesis's 32-byte node needs its two children fetched.
+
+use bytemuck::{Pod, Zeroable};
+
+use super::{BvhNode, FlatBvh};
+
+/// A 64-byte node: both children's boxes, then their references. A child with `count` 0 is
+/// an inner node (`child` indexes the node array); with `count > 0` it is a leaf of `count`
+/// triangles from `child`. Mirrors `Bvh64Node` in cl/cltrace.h.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Bvh64Node {
+    /// Left child: min.x, max.x, min.y, max.y.
+    pub left_xy: [f32; 4],
+    /// Right child: min.x, max.x, min.y, max.y.
+    pub right_xy: [f32; 4],
+    /// min.z, max.z of the left child, then of the right.
+    pub z: [f32; 4],
+    /// Left child, right child, left count, right count.
+    pub refs: [u32; 4],
+}
+
+/// Rebuilds a thesis-layout tree in the Aila–Laine layout, depth-first. A tree that is a
+/// single leaf gets a root whose two children are that same leaf.
+pub fn to_bvh64(flat: &FlatBvh) -> Vec<Bvh64Node> {
+    let nodes = &flat.nodes;
+    let root = &nodes[0];
+    if root.is_leaf() {
+        return vec![pair(root, root, 0, 0)];
+    }
+    // Inner nodes keep their depth-first order; number them.
+    let mut index = vec![u32::MAX; nodes.len()];
+    let mut count = 0u32;
+    for (i, n) in nodes.iter().enumerate() {
+        if !n.is_leaf() {
+            index[i] = count;
+            count += 1;
+        }
+    }
+    let reference = |i: usize| {
+        let n = &nodes[i];
+        if n.is_leaf() {
+            (n.left_or_first, n.count())
+        } else {
+            (index[i], 0)
+        }
+    };
+    nodes
+        .iter()
+        .filter(|n| !n.is_leaf())
+        .map(|n| {
+            let (l, r) = (n.left_or_first as usize, n.right_or_count as usize);
+            let (lref, lcount) = reference(l);
+            let (rref, rcount) = reference(r);
+            let mut node = pair(&nodes[l], &nodes[r], lref, rref);
+            node.refs[2] = lcount;
+            node.refs[3] = rcount;
+            node
+        })
+        .collect()
+}
+
+fn pair(l: &BvhNode, r: &BvhNode, lref: u32, rref: u32) -> Bvh64Node {
+    let leaf_count = |n: &BvhNode| if n.is_leaf() { n.count() } else { 0 };
+    Bvh64Node {
+        left_xy: [l.min[0], l.max[0], l.min[1], l.max[1]],
+        right_xy: [r.min[0], r.max[0], r.min[1], r.max[1]],
+        z: [l.min[2], l.max[2], r.min[2], r.max[2]],
+        refs: [
+            if l.is_leaf() { l.left_or_first } else { lref },
+            if r.is_leaf() { r.left_or_first } else { rref },
+            leaf_count(l),
+            leaf_count(r),
+        ],
+    }
+}

@@ -1,0 +1,153 @@
+//! Wide BVHs: the binary tree collapsed into nodes of up to 4 or 8 children, their boxes
+//! stored axis by axis so that one vector operation tests a plane of every child.
+//!
+//! The collapse is greedy by surface area: a node starts with its two children and, while
+//! it has room, replaces its largest inner child by that child's own children. Leaves stay
+//! as they are.
+
+use bytemuck::{Pod, Zeroable};
+
+use super::{BvhNode, FlatBvh};
+use crate::bvh::{INTERSECTION_COST, TRAVERSAL_COST};
+
+/// Marks an unused child slot in a wide node's `count`.
+pub const EMPTY_SLOT: u32 = u32::MAX;
+
+macro_rules! wide_node {
+    ($name:ident, $n:literal) => {
+        /// A wide node: the children's boxes plane by plane, then their references. A child
+        /// with `count` 0 is an inner node (`child` indexes the node array), with `count > 0`
+        /// a leaf of `count` triangles from `child`, with [`EMPTY_SLOT`] unused. Mirrored
+        /// in cl/cltrace.h.
+        #[repr(C)]
+        #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+        pub struct $name {
+            pub min_x: [f32; $n],
+            pub max_x: [f32; $n],
+            pub min_y: [f32; $n],
+            pub max_y: [f32; $n],
+            pub min_z: [f32; $n],
+            pub max_z: [f32; $n],
+            pub child: [u32; $n],
+            pub count: [u32; $n],
+        }
+
+        impl Default for $name {
+            fn default() -> Self {
+                $name {
+                    min_x: [0.0; $n],
+                    max_x: [0.0; $n],
+                    min_y: [0.0; $n],
+                    max_y: [0.0; $n],
+                    min_z: [0.0; $n],
+                    max_z: [0.0; $n],
+                    child: [0; $n],
+                    count: [EMPTY_SLOT; $n],
+                }
+            }
+        }
+
+        impl WideNode for $name {
+            const WIDTH: usize = $n;
+            fn set(&mut self, slot: usize, b: &BvhNode, child: u32, count: u32) {
+                self.min_x[slot] = b.min[0];
+                self.max_x[slot] = b.max[0];
+                self.min_y[slot] = b.min[1];
+                self.max_y[slot] = b.max[1];
+                self.min_z[slot] = b.min[2];
+                self.max_z[slot] = b.max[2];
+                self.child[slot] = child;
+                self.count[slot] = count;
+            }
+        }
+    };
+}
+
+wide_node!(Wide4Node, 4);
+wide_node!(Wide8Node, 8);
+
+/// What the collapse needs of a wide node type.
+pub trait WideNode: Default + Copy {
+    const WIDTH: usize;
+    /// Puts the child with box `b` in `slot`.
+    fn set(&mut self, slot: usize, b: &BvhNode, child: u32, count: u32);
+}
+
+/// A collapsed tree: nodes depth-first (root first), its depth in wide nodes, and its SAH
+/// cost under the same constants as the binary tree's (a wide node's visit costs one
+/// traversal step, whatever its width).
+pub struct Collapsed<N> {
+    pub nodes: Vec<N>,
+    pub depth: u32,
+    pub sah_cost: f64,
+}
+
+/// Collapses the thesis-layout tree into nodes of up to `N::WIDTH` children.
+pub fn collapse<N: WideNode>(flat: &FlatBvh) -> Collapsed<N> {
+    let nodes = &flat.nodes;
+    let area = |n: &BvhNode| {
+        let e = [
+            n.max[0] - n.min[0],
+            n.max[1] - n.min[1],
+            n.max[2] - n.min[2],
+        ]
+        .map(|v| v.max(0.0) as f64);
+        2.0 * (e[0] * e[1] + e[1] * e[2] + e[2] * e[0])
+    };
+    let mut out: Vec<N> = Vec::new();
+    let mut cost = 0.0;
+    let mut depth = 0;
+    // (binary node, depth) of wide nodes still to fill, and where each is to be written.
+    let mut stack = vec![(0usize, 1u32, None::<(usize, usize)>)];
+    while let Some((root, d, parent)) = stack.pop() {
+        let index = out.len();
+        out.push(N::default());
+        if let Some((p, slot)) = parent {
+            let b = &nodes[root];
+            out[p].set(slot, b, index as u32, 0);
+        }
+        depth = depth.max(d);
+        cost += TRAVERSAL_COST as f64 * area(&nodes[root]);
+        let mut children: Vec<usize> = if nodes[root].is_leaf() {
+            vec![root]
+        } else {
+            vec![
+                nodes[root].left_or_first as usize,
+                nodes[root].right_or_count as usize,
+            ]
+        };
+        while children.len() < N::WIDTH {
+            let Some((k, _)) = children
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| !nodes[**c].is_leaf())
+                .max_by(|a, b| area(&nodes[*a.1]).total_cmp(&area(&nodes[*b.1])))
+            else {
+                break;
+            };
+            let opened = children.remove(k);
+            children.insert(k, nodes[opened].right_or_count as usize);
+            children.insert(k, nodes[opened].left_or_first as usize);
+        }
+        // Inner children are visited last-pushed-first: push in reverse to keep order.
+        for (slot, &c) in children.iter().enumerate().rev() {
+            let n = &nodes[c];
+            if n.is_leaf() {
+                out[index].set(slot, n, n.left_or_first, n.count());
+                cost += INTERSECTION_COST as f64 * area(n) * n.count() as f64;
+            } else {
+                stack.push((c, d + 1, Some((index, slot))));
+            }
+        }
+    }
+    let root_area = area(&nodes[0]);
+    Collapsed {
+        nodes: out,
+        depth,
+        sah_cost: if root_area > 0.0 {
+            cost / root_area
+        } else {
+            0.0
+        },
+    }
+}

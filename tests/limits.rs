@@ -1,0 +1,149 @@
+//! Device limits: a frame or accumulation image larger than what the device allocates at
+//! once is rendered band by band and comes out the same; a scene larger than the device is
+//! refused before upload, naming both of the device's numbers.
+
+mod common;
+
+use std::sync::atomic::AtomicBool;
+
+use cltrace::bvh::{BuildOptions, Bvh};
+use cltrace::camera::Camera;
+use cltrace::input::generate::Generator;
+use cltrace::layout::FlatBvh;
+use cltrace::render::integrator::{Accumulation, Lighting, SampleSettings};
+use cltrace::render::opencl::ClTracer;
+use cltrace::render::{Shade, ShadeParams};
+use common::*;
+
+#[test]
+fn images_larger_than_one_allocation_are_rendered_in_bands() {
+    let mesh = generate(Generator::Sphere { subdivisions: 3 });
+    let bvh = FlatBvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
+    let camera = Camera::auto(&mesh.bounds(), 96, 80).unwrap();
+    let shade = ShadeParams::new(Shade::Lambert, &camera, &mesh.bounds());
+    let settings = SampleSettings {
+        lighting: Lighting::Ao {
+            samples: 4,
+            distance: 0.5,
+        },
+        offset: 1e-4,
+        seed: 9,
+    };
+    let device = device();
+    let render = |budget: Option<u64>| {
+        let program = ClTracer::compile(
+            &device,
+            Some((cltrace::layout::Layout::Bin32, bvh.depth)),
+            true,
+        )
+        .unwrap();
+        let mut tracer = ClTracer::bvh(&device, &program, &bvh).unwrap();
+        if let Some(bytes) = budget {
+            tracer.limit_image_bytes(bytes);
+        }
+        let (frame, times) = tracer
+            .render(&camera.pinhole(), 96, 80, &shade, false)
+            .unwrap();
+        let mut acc = Accumulation::new(96, 80);
+        tracer
+            .render_samples(
+                &camera.pinhole(),
+                &settings,
+                0..3,
+                &mut acc,
+                &AtomicBool::new(false),
+                &mut |_, _| {},
+            )
+            .unwrap();
+        (frame, times.launches, acc)
+    };
+    let (whole, _, whole_acc) = render(None);
+    // Images of at most a few rows at once, as on a device with a small largest allocation.
+    let (banded, launches, banded_acc) = render(Some(4 * 1024));
+    assert!(
+        launches >= 10,
+        "only {launches} launches: the bands were not small"
+    );
+    assert_eq!(whole.hits, banded.hits);
+    assert_eq!(whole.colors, banded.colors);
+    assert_eq!(whole_acc.pixels, banded_acc.pixels);
+}
+
+#[test]
+fn a_scene_larger_than_the_device_is_refused_before_upload() {
+    let mesh = generate(Generator::Sphere { subdivisions: 4 });
+    let bvh = FlatBvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
+    let mut device = device();
+    device.info.max_allocation = 64 * 1024;
+    device.info.global_memory = 1 << 30;
+    let program = ClTracer::compile_bvh(&device, bvh.depth).unwrap();
+    let err = ClTracer::bvh(&device, &program, &bvh)
+        .err()
+        .expect("refused");
+    let msg = err.to_string();
+    assert!(
+        msg.contains("1024 MiB of global memory") && msg.contains("at most 1 MiB at once"),
+        "{msg}"
+    );
+    assert_eq!(err.exit_code(), 1);
+    device.info.max_allocation = 1 << 30;
+    device.info.global_memory = 1 << 20;
+    let msg = ClTracer::bvh(&device, &program, &bvh)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(msg.contains("1 MiB of global memory"), "{msg}");
+}
+
+/// Without `--fallback` a missing device is the run's error (exit 1, no file); with
+/// `--fallback cpu` the render happens on the host and says so.
+#[test]
+fn fallback_to_the_cpu_only_when_asked() {
+    let bin = env!("CARGO_BIN_EXE_cltrace");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("f.png");
+    let run = |extra: &[&str]| {
+        std::process::Command::new(bin)
+            .args([
+                "render", "--device", "9:9", "--width", "16", "--height", "12", "-o",
+            ])
+            .arg(&out)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let failed = run(&[]);
+    assert_eq!(failed.status.code(), Some(1));
+    assert!(!out.exists());
+    let fell_back = run(&["--fallback", "cpu"]);
+    let stderr = String::from_utf8_lossy(&fell_back.stderr);
+    assert!(fell_back.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("rendering with cpu-bvh instead"),
+        "{stderr}"
+    );
+    assert_eq!(image::open(&out).unwrap().width(), 16);
+}
+
+/// A kernel that does not compile is an error carrying the device's build log.
+#[test]
+fn a_failed_kernel_build_shows_the_build_log() {
+    let device = device();
+    let Err(err) = device.build_source(
+        "broken.cl",
+        "__kernel void k(__global float* x) { x[0] = undefined_name; }",
+        "",
+    ) else {
+        panic!("the build should fail");
+    };
+    let msg = err.to_string();
+    assert!(
+        msg.starts_with("kernel broken.cl failed to build on"),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("build log:") && msg.contains("undefined_name"),
+        "{msg}"
+    );
+    assert_eq!(err.exit_code(), 1);
+}
