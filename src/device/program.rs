@@ -9,6 +9,10 @@ use crate::error::{Error, Result};
 
 const HEADER: &str = include_str!("../../cl/cltrace.h");
 const INCLUDE_LINE: &str = "#include \"cltrace.h\"";
+/// Reads the kernel sources from this folder instead of the embedded copies (development).
+const KERNEL_DIR_VAR: &str = "CLTRACE_KERNEL_DIR";
+/// Extra OpenCL build options, appended to cltrace's own (development, e.g. vendor flags).
+const BUILD_OPTIONS_VAR: &str = "CLTRACE_BUILD_OPTIONS";
 
 /// A kernel file of `cl/`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,8 +46,22 @@ impl KernelSource {
 
     /// The complete source: the kernel file with the shared header spliced in where it
     /// includes it (the program is built from memory, where `#include` finds no files).
+    /// With `CLTRACE_KERNEL_DIR` set, the files are read from that folder instead of the
+    /// copies embedded in the binary: for trying kernel changes without rebuilding.
     pub fn source(self) -> String {
-        self.text().replacen(INCLUDE_LINE, HEADER, 1)
+        match std::env::var_os(KERNEL_DIR_VAR) {
+            Some(dir) => {
+                let dir = std::path::Path::new(&dir);
+                let read = |name: &str| {
+                    std::fs::read_to_string(dir.join(name)).unwrap_or_else(|e| {
+                        // An unreadable override must not silently fall back.
+                        format!("#error \"{KERNEL_DIR_VAR}: cannot read {name}: {e}\"\n")
+                    })
+                };
+                read(self.file_name()).replacen(INCLUDE_LINE, &read("cltrace.h"), 1)
+            }
+            None => self.text().replacen(INCLUDE_LINE, HEADER, 1),
+        }
     }
 }
 
@@ -68,6 +86,10 @@ impl ClDevice {
         }
         for (name, value) in defines {
             options.push_str(&format!(" -D {name}={value}"));
+        }
+        if let Ok(extra) = std::env::var(BUILD_OPTIONS_VAR) {
+            options.push(' ');
+            options.push_str(&extra);
         }
         let names: Vec<&str> = kernels.iter().map(|k| k.file_name()).collect();
         let source: String = kernels
