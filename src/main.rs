@@ -214,7 +214,7 @@ struct BuildArgs {
     max_leaf_size: u32,
 
     /// Optimize the built tree by node reinsertion for up to N rounds (0 to 1000; 0 is off):
-    /// a lower SAH cost for more build time; rounds stop early once one gains under 0.1%
+    /// a lower SAH cost for more build time; rounds stop early once one gains under 0.01%
     #[arg(long, value_name = "N", default_value_t = BuildOptions::default().optimize_rounds)]
     optimize: u32,
 }

@@ -383,6 +383,14 @@ fn brute_estimate_s(
     triangles: usize,
 ) -> Result<f64> {
     let rays = camera.width as u64 * camera.height as u64;
+    // A first launch can carry one-time costs (NVIDIA's driver loads the kernel lazily, tens
+    // of ms) that would make the first thumbnail look 100x slower: launch once untimed.
+    let one_pixel = Camera {
+        width: 1,
+        height: 1,
+        ..*camera
+    };
+    renderer.render(&one_pixel, shade, false)?;
     let mut pixels = ((1u64 << 24) / triangles as u64).clamp(16, rays);
     loop {
         let scale = (pixels as f64 / rays as f64).sqrt();
@@ -405,6 +413,8 @@ fn brute_rays_estimate_s(renderer: &mut Renderer, rays: &[Ray], triangles: usize
     let mut n = ((1usize << 24) / triangles)
         .clamp(16, rays.len().max(16))
         .min(rays.len());
+    // Untimed first launch, as in brute_estimate_s.
+    renderer.trace_rays(&rays[..rays.len().min(1)], f32::INFINITY, false)?;
     loop {
         let (_, t) = renderer.trace_rays(&rays[..n], f32::INFINITY, false)?;
         if t.trace_ms >= 20.0 || n >= rays.len() {
