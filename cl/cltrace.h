@@ -350,8 +350,8 @@ inline uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hi
 #endif
 
 /* Wide traversal: each node's children boxes are tested plane by plane with one vector
- * operation per plane; leaf children are tested at once, inner ones sorted by entry
- * distance and the nearer visited first. Same contract as the LAYOUT 32 trace. */
+ * operation per plane; leaf children are tested at once, the nearest inner one visited
+ * next. Same contract as the LAYOUT 32 trace. */
 inline uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
     WatertightRay ray = watertight_ray(org, dir);
     float3 inv = safe_inverse(dir);
@@ -379,30 +379,31 @@ inline uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hi
         float near_a[LAYOUT], far_a[LAYOUT];
         WIDE_STORE(near, 0, near_a);
         WIDE_STORE(far, 0, far_a);
-        uint inner[LAYOUT];
-        float entry[LAYOUT];
-        uint m = 0;
+        /* Leaf children are tested at once; of the inner children hit, the nearest is
+         * visited next and the others pushed. No sorted list: with the loop unrolled every
+         * array index is a constant, so nothing but the stack leaves the registers. */
+        uint next = EMPTY_SLOT;
+        float next_entry = 0.0f;
+#pragma unroll
         for (uint k = 0; k < LAYOUT; ++k) {
             uint count = n->count[k];
             if (count == EMPTY_SLOT || !(near_a[k] <= far_a[k])) continue;
             if (count != 0) {
                 TEST_LEAF(n->child[k], count);
+            } else if (next == EMPTY_SLOT) {
+                next = n->child[k];
+                next_entry = near_a[k];
             } else {
-                /* Insertion into the list sorted by entry distance. */
-                uint j = m++;
-                while (j > 0 && entry[j - 1] > near_a[k]) { entry[j] = entry[j - 1]; inner[j] = inner[j - 1]; --j; }
-                entry[j] = near_a[k];
-                inner[j] = n->child[k];
+                if (sp >= STACK_SIZE) { atomic_or(status, STATUS_STACK_OVERFLOW); return MISS; }
+                bool nearer = near_a[k] < next_entry;
+                stack_node[sp] = nearer ? next : n->child[k];
+                stack_entry[sp] = nearer ? next_entry : near_a[k];
+                ++sp;
+                if (nearer) { next = n->child[k]; next_entry = near_a[k]; }
             }
         }
-        if (m > 0 && entry[0] <= t) {
-            if (sp + m - 1 > STACK_SIZE) { atomic_or(status, STATUS_STACK_OVERFLOW); return MISS; }
-            for (uint j = m - 1; j > 0; --j) {
-                stack_node[sp] = inner[j];
-                stack_entry[sp] = entry[j];
-                ++sp;
-            }
-            node = inner[0];
+        if (next != EMPTY_SLOT && next_entry <= t) {
+            node = next;
         } else POP_OR_BREAK
     }
     *t_hit = t;
