@@ -373,9 +373,11 @@ fn measure(
 }
 
 /// Seconds one brute-force frame of `camera` will take, from thumbnails of the same view:
-/// the first about 2^24 ray/triangle tests, each next one 8 times larger, until a thumbnail
-/// takes 20 ms (a GPU needs enough work to fill it before its times mean anything) or is
-/// the frame itself.
+/// the first about 2^24 ray/triangle tests, each next one 8 times larger, until one takes
+/// 20 ms while growing about linearly from the one before, or is the frame itself. A GPU
+/// runs a thumbnail smaller than it can hold in about the time of one ray (the NVIDIA H100
+/// takes 17 ms for one pixel of the bunny and 104 ms for 512x512), so time per pixel only
+/// means something once more pixels take proportionally more time.
 fn brute_estimate_s(
     renderer: &mut Renderer,
     camera: &Camera,
@@ -383,8 +385,8 @@ fn brute_estimate_s(
     triangles: usize,
 ) -> Result<f64> {
     let rays = camera.width as u64 * camera.height as u64;
-    // A first launch can carry one-time costs (NVIDIA's driver loads the kernel lazily, tens
-    // of ms) that would make the first thumbnail look 100x slower: launch once untimed.
+    // A first launch can carry one-time costs (NVIDIA's driver loads the kernel lazily):
+    // launch once untimed.
     let one_pixel = Camera {
         width: 1,
         height: 1,
@@ -392,6 +394,7 @@ fn brute_estimate_s(
     };
     renderer.render(&one_pixel, shade, false)?;
     let mut pixels = ((1u64 << 24) / triangles as u64).clamp(16, rays);
+    let mut growth = Growth::default();
     loop {
         let scale = (pixels as f64 / rays as f64).sqrt();
         let probe = Camera {
@@ -400,9 +403,9 @@ fn brute_estimate_s(
             ..*camera
         };
         let (_, t) = renderer.render(&probe, shade, false)?;
-        let probed = probe.width as f64 * probe.height as f64;
-        if t.trace_ms >= 20.0 || probed as u64 >= rays {
-            return Ok(t.trace_ms / probed * rays as f64 / 1e3);
+        let probed = probe.width as u64 * probe.height as u64;
+        if let Some(estimate) = growth.estimate(probed, rays, t.trace_ms) {
+            return Ok(estimate);
         }
         pixels = (pixels * 8).min(rays);
     }
@@ -415,12 +418,34 @@ fn brute_rays_estimate_s(renderer: &mut Renderer, rays: &[Ray], triangles: usize
         .min(rays.len());
     // Untimed first launch, as in brute_estimate_s.
     renderer.trace_rays(&rays[..rays.len().min(1)], f32::INFINITY, false)?;
+    let mut growth = Growth::default();
     loop {
         let (_, t) = renderer.trace_rays(&rays[..n], f32::INFINITY, false)?;
-        if t.trace_ms >= 20.0 || n >= rays.len() {
-            return Ok(t.trace_ms / n.max(1) as f64 * rays.len() as f64 / 1e3);
+        if let Some(estimate) = growth.estimate(n as u64, rays.len() as u64, t.trace_ms) {
+            return Ok(estimate);
         }
         n = (n * 8).min(rays.len());
+    }
+}
+
+/// The growing samples of a brute-force estimate.
+#[derive(Default)]
+struct Growth {
+    /// The previous sample: rays traced and milliseconds taken.
+    last: Option<(u64, f64)>,
+}
+
+impl Growth {
+    /// Seconds for `total` rays, once a sample of `done` rays taking `ms` can be trusted:
+    /// it is the whole work, or it took 20 ms and at least half as much longer than the
+    /// previous one as it has more rays (the device is full, time grows with work).
+    fn estimate(&mut self, done: u64, total: u64, ms: f64) -> Option<f64> {
+        let linear = self.last.is_some_and(|(last_done, last_ms)| {
+            ms / last_ms.max(1e-6) >= 0.5 * done as f64 / last_done as f64
+        });
+        self.last = Some((done, ms));
+        (done >= total || (ms >= 20.0 && linear))
+            .then(|| ms / done.max(1) as f64 * total as f64 / 1e3)
     }
 }
 
@@ -532,4 +557,35 @@ fn targets(req: &BenchRequest) -> Result<Vec<Target>> {
         }
     }
     Ok(targets)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Growth;
+
+    /// A GPU-like device: time nearly flat while the thumbnails are smaller than the device
+    /// holds, then linear. The estimate waits for the linear part.
+    #[test]
+    fn estimates_wait_for_time_to_grow_with_the_work() {
+        let mut g = Growth::default();
+        assert_eq!(
+            g.estimate(256, 262_144, 33.0),
+            None,
+            "one sample proves nothing"
+        );
+        assert_eq!(
+            g.estimate(2_048, 262_144, 49.0),
+            None,
+            "8x rays, 1.5x time: not full"
+        );
+        let seconds = g.estimate(16_384, 262_144, 330.0).expect("linear now");
+        assert!((seconds - 330.0 * 16.0 / 1e3).abs() < 1e-9);
+        // The whole work is its own estimate, however it grew.
+        let mut g = Growth::default();
+        assert_eq!(g.estimate(100, 100, 5.0), Some(5.0 / 1e3));
+        // Short samples are not trusted even when linear.
+        let mut g = Growth::default();
+        g.estimate(10, 1000, 1.0);
+        assert_eq!(g.estimate(80, 1000, 8.0), None);
+    }
 }
