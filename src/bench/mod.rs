@@ -336,11 +336,15 @@ fn measure(
         skipped: None,
     };
     if matches!(method, Method::CpuBrute | Method::ClBrute) {
+        let frames = (req.warmup + req.repetitions) as f64;
+        // Sampling may stop once a frame surely takes longer than the budget allows.
+        let growth = Growth::new(req.brute_budget_s / frames);
+        let triangles = mesh.triangle_count();
         let per_frame = match kind {
-            RayKind::Primary => brute_estimate_s(renderer, &camera, &shade, mesh.triangle_count())?,
-            RayKind::Diffuse => brute_rays_estimate_s(renderer, diffuse, mesh.triangle_count())?,
+            RayKind::Primary => brute_estimate_s(renderer, &camera, &shade, triangles, growth)?,
+            RayKind::Diffuse => brute_rays_estimate_s(renderer, diffuse, triangles, growth)?,
         };
-        let estimate_s = per_frame * (req.warmup + req.repetitions) as f64;
+        let estimate_s = per_frame * frames;
         if estimate_s > req.brute_budget_s {
             row.skipped = Some(format!(
                 "estimated {estimate_s:.0} s for {} frames > {} s budget",
@@ -374,7 +378,8 @@ fn measure(
 
 /// Seconds one brute-force frame of `camera` will take, from thumbnails of the same view:
 /// the first about 2^24 ray/triangle tests, each next one 8 times larger, until one takes
-/// 20 ms while growing about linearly from the one before, or is the frame itself. A GPU
+/// 20 ms while growing about linearly from the one before, takes longer alone than a frame
+/// may (see [`Growth`]), or is the frame itself. A GPU
 /// runs a thumbnail smaller than it can hold in about the time of one ray (the NVIDIA H100
 /// takes 17 ms for one pixel of the bunny and 104 ms for 512x512), so time per pixel only
 /// means something once more pixels take proportionally more time.
@@ -383,6 +388,7 @@ fn brute_estimate_s(
     camera: &Camera,
     shade: &ShadeParams,
     triangles: usize,
+    mut growth: Growth,
 ) -> Result<f64> {
     let rays = camera.width as u64 * camera.height as u64;
     // A first launch can carry one-time costs (NVIDIA's driver loads the kernel lazily):
@@ -394,7 +400,6 @@ fn brute_estimate_s(
     };
     renderer.render(&one_pixel, shade, false)?;
     let mut pixels = ((1u64 << 24) / triangles as u64).clamp(16, rays);
-    let mut growth = Growth::default();
     loop {
         let scale = (pixels as f64 / rays as f64).sqrt();
         let probe = Camera {
@@ -412,13 +417,17 @@ fn brute_estimate_s(
 }
 
 /// [`brute_estimate_s`] for a ray buffer: growing prefixes of the rays.
-fn brute_rays_estimate_s(renderer: &mut Renderer, rays: &[Ray], triangles: usize) -> Result<f64> {
+fn brute_rays_estimate_s(
+    renderer: &mut Renderer,
+    rays: &[Ray],
+    triangles: usize,
+    mut growth: Growth,
+) -> Result<f64> {
     let mut n = ((1usize << 24) / triangles)
         .clamp(16, rays.len().max(16))
         .min(rays.len());
     // Untimed first launch, as in brute_estimate_s.
     renderer.trace_rays(&rays[..rays.len().min(1)], f32::INFINITY, false)?;
-    let mut growth = Growth::default();
     loop {
         let (_, t) = renderer.trace_rays(&rays[..n], f32::INFINITY, false)?;
         if let Some(estimate) = growth.estimate(n as u64, rays.len() as u64, t.trace_ms) {
@@ -429,23 +438,35 @@ fn brute_rays_estimate_s(renderer: &mut Renderer, rays: &[Ray], triangles: usize
 }
 
 /// The growing samples of a brute-force estimate.
-#[derive(Default)]
 struct Growth {
     /// The previous sample: rays traced and milliseconds taken.
     last: Option<(u64, f64)>,
+    /// Seconds per frame past which the exact figure no longer matters.
+    enough_s: f64,
 }
 
 impl Growth {
+    fn new(enough_s: f64) -> Self {
+        Growth {
+            last: None,
+            enough_s,
+        }
+    }
+
     /// Seconds for `total` rays, once a sample of `done` rays taking `ms` can be trusted:
     /// it is the whole work, or it took 20 ms and at least half as much longer than the
-    /// previous one as it has more rays (the device is full, time grows with work).
+    /// previous one as it has more rays (the device is full, time grows with work). A
+    /// sample that alone took longer than `enough_s` also ends the sampling, as the frame
+    /// takes longer still: its figure (scaled by rays) may then overstate the frame.
     fn estimate(&mut self, done: u64, total: u64, ms: f64) -> Option<f64> {
-        let linear = self.last.is_some_and(|(last_done, last_ms)| {
-            ms / last_ms.max(1e-6) >= 0.5 * done as f64 / last_done as f64
-        });
-        self.last = Some((done, ms));
-        (done >= total || (ms >= 20.0 && linear))
-            .then(|| ms / done.max(1) as f64 * total as f64 / 1e3)
+        let last = self.last.replace((done, ms));
+        let scaled_s = ms / done.max(1) as f64 * total as f64 / 1e3;
+        if done >= total || ms / 1e3 > self.enough_s {
+            return Some(scaled_s);
+        }
+        let (last_done, last_ms) = last?;
+        let linear = ms / last_ms.max(1e-6) >= 0.5 * done as f64 / last_done as f64;
+        (ms >= 20.0 && linear).then_some(scaled_s)
     }
 }
 
@@ -567,25 +588,27 @@ mod tests {
     /// holds, then linear. The estimate waits for the linear part.
     #[test]
     fn estimates_wait_for_time_to_grow_with_the_work() {
-        let mut g = Growth::default();
-        assert_eq!(
-            g.estimate(256, 262_144, 33.0),
-            None,
-            "one sample proves nothing"
-        );
-        assert_eq!(
-            g.estimate(2_048, 262_144, 49.0),
-            None,
-            "8x rays, 1.5x time: not full"
-        );
+        let mut g = Growth::new(100.0);
+        assert_eq!(g.estimate(256, 262_144, 33.0), None, "one sample");
+        assert_eq!(g.estimate(2_048, 262_144, 49.0), None, "not full yet");
         let seconds = g.estimate(16_384, 262_144, 330.0).expect("linear now");
         assert!((seconds - 330.0 * 16.0 / 1e3).abs() < 1e-9);
         // The whole work is its own estimate, however it grew.
-        let mut g = Growth::default();
+        let mut g = Growth::new(100.0);
         assert_eq!(g.estimate(100, 100, 5.0), Some(5.0 / 1e3));
         // Short samples are not trusted even when linear.
-        let mut g = Growth::default();
+        let mut g = Growth::new(100.0);
         g.estimate(10, 1000, 1.0);
         assert_eq!(g.estimate(80, 1000, 8.0), None);
+    }
+
+    /// Sampling stops once one sample alone takes longer than a frame may.
+    #[test]
+    fn hopeless_work_stops_at_the_first_sample_over_the_limit() {
+        let mut g = Growth::new(1.0);
+        let s = g
+            .estimate(1_000, 1_000_000, 1_500.0)
+            .expect("over the limit");
+        assert_eq!(s, 1_500.0);
     }
 }
