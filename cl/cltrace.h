@@ -1,5 +1,5 @@
 /* cltrace.h: what every cltrace kernel shares. The structs mirror the #[repr(C)] Rust
- * structs of the same names (src/layout.rs, src/render/mod.rs); tests/layout.rs pins their
+ * structs of the same names (src/layout/, src/material.rs, src/render/mod.rs); tests/layout.rs pins their
  * sizes and field offsets on both sides through probe.cl. The arithmetic mirrors the Rust
  * CPU reference (src/camera.rs, src/triangle.rs, src/render/shade.rs) operation for
  * operation, so that a device and the host pick the same triangle for every pixel. */
@@ -8,6 +8,11 @@
 
 /* a * b + c must round twice, exactly as on the host: no fused multiply-adds. */
 #pragma OPENCL FP_CONTRACT OFF
+
+/* Every helper is inlined: PoCL 3.1 kept intersect_triangle a call inside the traversal
+ * loop, and forcing it measured up to 19% faster there (README, Performance); NVIDIA
+ * inlines them anyway. */
+#define FORCE_INLINE inline __attribute__((always_inline))
 
 #define MISS 0xFFFFFFFFu
 #define LEAF_FLAG 0x80000000u
@@ -73,7 +78,7 @@ typedef struct {
 /* ---- rays ---------------------------------------------------------------------------- */
 
 /* Pixel (x, y)'s primary ray direction, unnormalised: p0 + (x+0.5) du + (y+0.5) dv. */
-inline float3 camera_ray(float4 p0, float4 du, float4 dv, uint x, uint y) {
+FORCE_INLINE float3 camera_ray(float4 p0, float4 du, float4 dv, uint x, uint y) {
     float fx = (float)x + 0.5f;
     float fy = (float)y + 0.5f;
     return (float3)((p0.x + fx * du.x) + fy * dv.x,
@@ -81,7 +86,7 @@ inline float3 camera_ray(float4 p0, float4 du, float4 dv, uint x, uint y) {
                     (p0.z + fx * du.z) + fy * dv.z);
 }
 
-inline float pick(float3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
+FORCE_INLINE float pick(float3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
 
 /* Per-ray constants of the watertight ray/triangle test (Woop, Benthin, Wald 2013):
  * kz is the dominant axis of the direction, (kx, ky) the other two in an order that keeps
@@ -92,7 +97,7 @@ typedef struct {
     float sx, sy, sz;
 } WatertightRay;
 
-inline WatertightRay watertight_ray(float3 org, float3 dir) {
+FORCE_INLINE WatertightRay watertight_ray(float3 org, float3 dir) {
     WatertightRay r;
     float ax = fabs(dir.x), ay = fabs(dir.y), az = fabs(dir.z);
     int kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
@@ -111,7 +116,7 @@ inline WatertightRay watertight_ray(float3 org, float3 dir) {
 /* Ray parameter of the hit with triangle (v0, v1, v2) if it is closer than t_max, else a
  * negative number. Watertight: a ray through a shared edge or vertex hits at least one of
  * the triangles. Zero-area triangles never hit. */
-inline float intersect_triangle(const WatertightRay* r, float3 v0, float3 v1, float3 v2, float t_max) {
+FORCE_INLINE float intersect_triangle(const WatertightRay* r, float3 v0, float3 v1, float3 v2, float t_max) {
     float3 a = v0 - r->org, b = v1 - r->org, c = v2 - r->org;
     float a_z = pick(a, r->kz), b_z = pick(b, r->kz), c_z = pick(c, r->kz);
     float ax = pick(a, r->kx) - r->sx * a_z, ay = pick(a, r->ky) - r->sy * a_z;
@@ -128,7 +133,7 @@ inline float intersect_triangle(const WatertightRay* r, float3 v0, float3 v1, fl
     return t / det;
 }
 
-inline float3 load3(const __global float* p) { return (float3)(p[0], p[1], p[2]); }
+FORCE_INLINE float3 load3(const __global float* p) { return (float3)(p[0], p[1], p[2]); }
 
 /* Widens a box's exit distance so that rounding in the slab test never culls a box the ray
  * touches: 1 + 2 gamma(3) (Ize 2013), exactly 1 + 3 ulp in float. */
@@ -137,13 +142,13 @@ inline float3 load3(const __global float* p) { return (float3)(p[0], p[1], p[2])
 /* 1 / dir per component: a zero component gives an infinite inverse. Where the origin lies
  * in that slab's plane, 0 * inf makes the slab's distances NaN, which fmin and fmax skip, so
  * a ray lying in a box face's plane counts as inside the slab (src/bvh/traverse.rs). */
-inline float3 safe_inverse(float3 d) {
+FORCE_INLINE float3 safe_inverse(float3 d) {
     return (float3)(1.0f / d.x, 1.0f / d.y, 1.0f / d.z);
 }
 
 /* A stored triangle is three 16-byte rows (v0 prim, v1 material, v2 pad), 16-byte aligned
  * in its buffer: three vector loads instead of nine scalar ones. */
-inline float intersect_stored(const WatertightRay* r, const __global Triangle* tri, float t_max) {
+FORCE_INLINE float intersect_stored(const WatertightRay* r, const __global Triangle* tri, float t_max) {
     const __global float4* row = (const __global float4*)tri;
     return intersect_triangle(r, row[0].xyz, row[1].xyz, row[2].xyz, t_max);
 }
@@ -184,13 +189,13 @@ inline float intersect_stored(const WatertightRay* r, const __global Triangle* t
 /* The inverse used for near planes: where a subnormal (or zero) direction component made
  * the inverse infinite, +-FLT_MAX, an entry no later than the true one (the far planes keep
  * the infinity, an exit no earlier): both err towards visiting the box. */
-inline float3 near_inverse(float3 inv) {
+FORCE_INLINE float3 near_inverse(float3 inv) {
     return select(inv, copysign((float3)(FLT_MAX), inv), isinf(inv));
 }
 
 /* Entry distance into the box [lo, hi] if the ray meets it before t_max, else -1: the
  * robust slab test of src/bvh/traverse.rs. */
-inline float box_entry(float3 lo, float3 hi, float3 org, float3 inv, float t_max) {
+FORCE_INLINE float box_entry(float3 lo, float3 hi, float3 org, float3 inv, float t_max) {
     /* Each slab's near and far planes are picked by the inverse's sign, not by comparing
      * distances, so that a NaN never stands in for the wrong one; fmin and fmax skip NaNs. */
     int3 back = signbit(inv);
@@ -227,7 +232,7 @@ inline float box_entry(float3 lo, float3 hi, float3 org, float3 inv, float t_max
 #if defined(LAYOUT) && LAYOUT == 32
 
 /* Entry distance into `node`'s box if the ray meets it before t_max, else -1. */
-inline float hit_box(const __global BvhNode* node, float3 org, float3 inv, float t_max) {
+FORCE_INLINE float hit_box(const __global BvhNode* node, float3 org, float3 inv, float t_max) {
     const __global float4* row = (const __global float4*)node;
     return box_entry(row[0].xyz, row[1].xyz, org, inv, t_max);
 }
@@ -238,7 +243,7 @@ inline float hit_box(const __global BvhNode* node, float3 org, float3 inv, float
  * mirrors src/bvh/traverse.rs step for step. The stack holds STACK_SIZE entries, the
  * tree's depth, which a traversal never needs more than; should it anyway, bit 0 of
  * *status is set and the ray reported as a miss, never written out of bounds. */
-inline uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
+FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
     WatertightRay ray = watertight_ray(org, dir);
     float3 inv = safe_inverse(dir);
     float t = t_max;
@@ -301,7 +306,7 @@ inline uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hi
  * keeps node indices only: a popped node's children are tested against the closest hit
  * anyway, and halving the stack traffic measured 3-5% faster on the H100 than culling
  * popped nodes by a stored entry distance. */
-inline uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
+FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
     WatertightRay ray = watertight_ray(org, dir);
     float3 inv = safe_inverse(dir);
     float t = t_max;
@@ -352,7 +357,7 @@ inline uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hi
 /* Wide traversal: each node's children boxes are tested plane by plane with one vector
  * operation per plane; leaf children are tested at once, the nearest inner one visited
  * next. Same contract as the LAYOUT 32 trace. */
-inline uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
+FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
     WatertightRay ray = watertight_ray(org, dir);
     float3 inv = safe_inverse(dir);
     float3 inv_near = near_inverse(inv);
@@ -417,7 +422,7 @@ inline uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hi
 
 /* Brute force: every triangle, the first in order winning a tie (or, with any_hit, the
  * first hit at all). Same contract as the BVH's trace above. */
-inline uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
+FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
     WatertightRay ray = watertight_ray(org, dir);
     float t = t_max;
     uint best = MISS;
@@ -435,12 +440,12 @@ inline uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hi
 
 #endif
 
-inline float length3(float3 d) { return sqrt(d.x * d.x + d.y * d.y + d.z * d.z); }
+FORCE_INLINE float length3(float3 d) { return sqrt(d.x * d.x + d.y * d.y + d.z * d.z); }
 
 /* ---- sampling (mirrors src/render/sampling.rs) ---------------------------------------- */
 
 /* Chris Wellons' lowbias32 integer hash. */
-inline uint hash_u32(uint x) {
+FORCE_INLINE uint hash_u32(uint x) {
     x ^= x >> 16; x *= 0x7feb352du;
     x ^= x >> 15; x *= 0x846ca68bu;
     x ^= x >> 16;
@@ -448,19 +453,19 @@ inline uint hash_u32(uint x) {
 }
 
 /* A counter-based random stream: a number is a hash of (seed, pixel, sample, dimension). */
-inline uint sampler_key(uint seed, uint pixel, uint sample) {
+FORCE_INLINE uint sampler_key(uint seed, uint pixel, uint sample) {
     return hash_u32(hash_u32(hash_u32(seed ^ 0x9e3779b9u) ^ pixel) ^ sample);
 }
 
-inline float sample_1d(uint key, uint dim) {
+FORCE_INLINE float sample_1d(uint key, uint dim) {
     return (float)(hash_u32(key ^ (dim * 0x85ebca6bu)) >> 8) * (1.0f / 16777216.0f);
 }
 
 #define DIMS_PER_BOUNCE 8u
-inline uint bounce_dim(uint b) { return 2u + b * DIMS_PER_BOUNCE; }
+FORCE_INLINE uint bounce_dim(uint b) { return 2u + b * DIMS_PER_BOUNCE; }
 
 /* A cosine-weighted unit direction about the unit normal n (Duff et al. 2017 basis). */
-inline float3 cosine_direction(float3 n, float u1, float u2) {
+FORCE_INLINE float3 cosine_direction(float3 n, float u1, float u2) {
     float r = sqrt(u1);
     float phi = 2.0f * M_PI_F * u2;
     float x = r * cos(phi), y = r * sin(phi);
@@ -474,14 +479,14 @@ inline float3 cosine_direction(float3 n, float u1, float u2) {
 }
 
 /* A uniform point on the triangle (a, b, c). */
-inline float3 triangle_point(float3 a, float3 b, float3 c, float u1, float u2) {
+FORCE_INLINE float3 triangle_point(float3 a, float3 b, float3 c, float u1, float u2) {
     float su = sqrt(u1);
     float w0 = 1.0f - su, w1 = u2 * su;
     return a * w0 + b * w1 + c * (1.0f - w0 - w1);
 }
 
 /* The ray direction of pixel (x, y) jittered within the pixel. */
-inline float3 jittered_ray(float4 p0, float4 du, float4 dv, uint x, uint y, uint key) {
+FORCE_INLINE float3 jittered_ray(float4 p0, float4 du, float4 dv, uint x, uint y, uint key) {
     float fx = (float)x + sample_1d(key, 0u);
     float fy = (float)y + sample_1d(key, 1u);
     return (float3)((p0.x + fx * du.x) + fy * dv.x,
@@ -490,14 +495,14 @@ inline float3 jittered_ray(float4 p0, float4 du, float4 dv, uint x, uint y, uint
 }
 
 /* The unit geometric normal of tri, turned to face dir's origin side. */
-inline float3 facing_normal(const __global Triangle* tri, float3 dir) {
+FORCE_INLINE float3 facing_normal(const __global Triangle* tri, float3 dir) {
     float3 v0 = load3(tri->v0);
     float3 n = normalize(cross(load3(tri->v1) - v0, load3(tri->v2) - v0));
     return dot(n, dir) > 0.0f ? -n : n;
 }
 
 /* The sky of scenes without emitters: white at the horizon, blue overhead, grey below. */
-inline float3 sky(float3 d) {
+FORCE_INLINE float3 sky(float3 d) {
     float up = d.y / length(d);
     return up >= 0.0f ? mix((float3)(1.0f), (float3)(0.45f, 0.65f, 1.0f), up)
                       : mix((float3)(1.0f), (float3)(0.35f), -up);
@@ -505,15 +510,15 @@ inline float3 sky(float3 d) {
 
 /* ---- shading and output -------------------------------------------------------------- */
 
-inline uint quantize(float v) { return (uint)(clamp(v, 0.0f, 1.0f) * 255.0f + 0.5f); }
+FORCE_INLINE uint quantize(float v) { return (uint)(clamp(v, 0.0f, 1.0f) * 255.0f + 0.5f); }
 
-inline uint pack_rgba(float r, float g, float b) {
+FORCE_INLINE uint pack_rgba(float r, float g, float b) {
     return quantize(r) | (quantize(g) << 8) | (quantize(b) << 16) | (255u << 24);
 }
 
 /* The colour of a hit on `tri` seen along `dir`; black for a miss. Mirrors
  * src/render/shade.rs. */
-inline uint shade_hit(int mode, float near, float far, const __global Triangle* tri, float distance, float3 dir) {
+FORCE_INLINE uint shade_hit(int mode, float near, float far, const __global Triangle* tri, float distance, float3 dir) {
     float3 v0 = load3(tri->v0);
     float3 e1 = load3(tri->v1) - v0, e2 = load3(tri->v2) - v0;
     float3 n = (float3)(e1.y * e2.z - e1.z * e2.y, e1.z * e2.x - e1.x * e2.z, e1.x * e2.y - e1.y * e2.x);
@@ -533,7 +538,7 @@ inline uint shade_hit(int mode, float near, float far, const __global Triangle* 
 
 /* Writes pixel (x, row) of the pitched output images, whose row 0 is the first image row of
  * the band being traced. Pitches count elements, not bytes. */
-inline void store_pixel(__global Hit* hits, uint hit_pitch, __global uint* colors, uint color_pitch,
+FORCE_INLINE void store_pixel(__global Hit* hits, uint hit_pitch, __global uint* colors, uint color_pitch,
                         uint x, uint row, uint best, float t, float3 dir, const __global Triangle* tris,
                         int shade, float near, float far) {
     Hit h;

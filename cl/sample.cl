@@ -19,14 +19,14 @@
     uint ao_samples, float ao_distance, float4 light, uint max_bounces, \
     __global float4* accum, __global uint* rays, uint accum_pitch
 
-inline void add_sample(__global float4* accum, __global uint* rays, uint accum_pitch,
+FORCE_INLINE void add_sample(__global float4* accum, __global uint* rays, uint accum_pitch,
                        uint x, uint row, float3 radiance, uint ray_count) {
     uint i = row * accum_pitch + x;
     accum[i] += (float4)(radiance, 1.0f);
     rays[i] += ray_count;
 }
 
-inline bool occluded(SCENE_PARAMS, float3 org, float3 dir, float t_max) {
+FORCE_INLINE bool occluded(SCENE_PARAMS, float3 org, float3 dir, float t_max) {
     float t;
     return trace(SCENE, org, dir, t_max, true, &t) != MISS;
 }
@@ -82,7 +82,7 @@ __kernel void sample_shadow(SAMPLE_PARAMS) {
 }
 
 /* The emitter whose CDF interval holds u. */
-inline uint pick_emitter(__global const float* cdf, uint count, float u) {
+FORCE_INLINE uint pick_emitter(__global const float* cdf, uint count, float u) {
     uint lo = 0, hi = count - 1;
     while (lo < hi) {
         uint mid = (lo + hi) / 2;
