@@ -133,3 +133,78 @@ fn lines_split_at_unicode_whitespace_as_tobj_splits_them() {
     let mesh = fuzz_cases::obj(text.as_bytes()).expect("a triangle with vt references");
     assert_eq!(mesh.triangles, [[0, 1, 2]]);
 }
+
+/// The OpenCL kernels on the BVH regression soups (rays along box planes, subnormal
+/// direction components, hits one ulp before `t_max`, slivers): for every node layout,
+/// each ray hits what brute force on the host hits, under the rules of the `bvh` target
+/// (the same triangle at the same distance, or a tie within rounding that the kernel's
+/// triangle really makes; a miss only where brute force hits at the very end of the ray
+/// or outside the triangle's own box).
+#[test]
+fn bvh_regressions_trace_alike_on_the_opencl_device() {
+    use cltrace::bvh::{BuildOptions, Bvh};
+    use cltrace::device::{ClDevice, DeviceSelector};
+    use cltrace::layout::{DeviceLayout, FlatBvh, Layout, triangles_in_order};
+    use cltrace::render::cpu::{BruteForce, ClosestHit};
+    use cltrace::render::opencl::ClTracer;
+    use cltrace::triangle::WatertightRay;
+    use fuzz_cases::{TIE, box_entry, decode_soup};
+
+    let selector = DeviceSelector::from_flag_or_env(None).expect("valid CLTRACE_DEVICE");
+    let device = ClDevice::select(&selector).expect("an OpenCL device");
+    let mut traced = 0;
+    for (name, bytes) in inputs("bvh") {
+        let soup = decode_soup(&bytes, true);
+        let mesh = &soup.mesh;
+        if mesh.check(std::path::Path::new(&name)).is_err() {
+            continue;
+        }
+        let n = mesh.triangle_count();
+        let brute = BruteForce {
+            triangles: triangles_in_order(mesh, 0..n as u32),
+        };
+        let bvh = Bvh::build(mesh, &BuildOptions::default());
+        let sah = bvh.stats().sah_cost;
+        let flat = FlatBvh::new(bvh, mesh);
+        for layout in Layout::ALL {
+            let laid = DeviceLayout::new(flat.clone(), layout, sah);
+            let program =
+                ClTracer::compile(&device, Some((layout, laid.stack_size)), false).unwrap();
+            let mut tracer = ClTracer::with_layout(&device, &program, &laid).unwrap();
+            for (k, (ray, t_max)) in soup.rays.iter().enumerate() {
+                let hit = tracer
+                    .trace_rays(std::slice::from_ref(ray), *t_max, false)
+                    .unwrap()[0];
+                let got = (!hit.is_miss()).then_some((hit.prim, hit.t));
+                let expected = brute.closest_hit(ray, *t_max);
+                let at_the_end = expected.is_some_and(|(_, s)| s >= *t_max * (1.0 - TIE));
+                let impossible = expected.is_some_and(|(i, s)| {
+                    let tri = &brute.triangles[i];
+                    s < box_entry(ray, [tri.v0, tri.v1, tri.v2]) * (1.0 - TIE)
+                });
+                let length = ray.dir.length();
+                let ok = match (expected, got) {
+                    (None, None) => true,
+                    (Some(_), None) => at_the_end || impossible,
+                    (Some((i, s)), Some((p, t))) => {
+                        let s = s * length;
+                        let a = brute.triangles[i].prim;
+                        let own = WatertightRay::new(ray)
+                            .intersect_stored(&brute.triangles[p as usize], *t_max)
+                            .map(|u| u * length);
+                        let near = |u: f32| (u - s).abs() <= TIE * s.abs().max(u.abs());
+                        (a == p && near(t)) || (near(t) && own.is_some_and(near)) || impossible
+                    }
+                    (None, Some(_)) => false,
+                };
+                assert!(
+                    ok,
+                    "{name}, {layout:?}, ray {k} {ray:?} (t_max {t_max}): brute force \
+                     {expected:?}, the kernel {got:?}"
+                );
+                traced += 1;
+            }
+        }
+    }
+    eprintln!("{traced} regression rays traced on {}", device.info.name);
+}
