@@ -344,10 +344,14 @@ fn measure(
             RayKind::Primary => brute_estimate_s(renderer, &camera, &shade, triangles, growth)?,
             RayKind::Diffuse => brute_rays_estimate_s(renderer, diffuse, triangles, growth)?,
         };
-        let estimate_s = per_frame * frames;
+        let estimate_s = per_frame.seconds() * frames;
         if estimate_s > req.brute_budget_s {
+            let how = match per_frame {
+                Estimate::About(_) => "estimated",
+                Estimate::AtLeast(_) => "at least",
+            };
             row.skipped = Some(format!(
-                "estimated {estimate_s:.0} s for {} frames > {} s budget",
+                "{how} {estimate_s:.0} s for {} frames > {} s budget",
                 req.warmup + req.repetitions,
                 req.brute_budget_s
             ));
@@ -389,7 +393,7 @@ fn brute_estimate_s(
     shade: &ShadeParams,
     triangles: usize,
     mut growth: Growth,
-) -> Result<f64> {
+) -> Result<Estimate> {
     let rays = camera.width as u64 * camera.height as u64;
     // A first launch can carry one-time costs (NVIDIA's driver loads the kernel lazily):
     // launch once untimed.
@@ -422,7 +426,7 @@ fn brute_rays_estimate_s(
     rays: &[Ray],
     triangles: usize,
     mut growth: Growth,
-) -> Result<f64> {
+) -> Result<Estimate> {
     let mut n = ((1usize << 24) / triangles)
         .clamp(16, rays.len().max(16))
         .min(rays.len());
@@ -434,6 +438,23 @@ fn brute_rays_estimate_s(
             return Ok(estimate);
         }
         n = (n * 8).min(rays.len());
+    }
+}
+
+/// How long a brute-force frame takes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Estimate {
+    /// About this many seconds (scaled from a sample on a full device).
+    About(f64),
+    /// At least this many seconds: one smaller sample alone took that long.
+    AtLeast(f64),
+}
+
+impl Estimate {
+    fn seconds(self) -> f64 {
+        match self {
+            Estimate::About(s) | Estimate::AtLeast(s) => s,
+        }
     }
 }
 
@@ -457,16 +478,20 @@ impl Growth {
     /// it is the whole work, or it took 20 ms and at least half as much longer than the
     /// previous one as it has more rays (the device is full, time grows with work). A
     /// sample that alone took longer than `enough_s` also ends the sampling, as the frame
-    /// takes longer still: its figure (scaled by rays) may then overstate the frame.
-    fn estimate(&mut self, done: u64, total: u64, ms: f64) -> Option<f64> {
+    /// takes longer still: that sample's time is then a lower bound.
+    fn estimate(&mut self, done: u64, total: u64, ms: f64) -> Option<Estimate> {
         let last = self.last.replace((done, ms));
-        let scaled_s = ms / done.max(1) as f64 * total as f64 / 1e3;
-        if done >= total || ms / 1e3 > self.enough_s {
-            return Some(scaled_s);
+        let scaled = Estimate::About(ms / done.max(1) as f64 * total as f64 / 1e3);
+        if done >= total {
+            return Some(scaled);
         }
-        let (last_done, last_ms) = last?;
-        let linear = ms / last_ms.max(1e-6) >= 0.5 * done as f64 / last_done as f64;
-        (ms >= 20.0 && linear).then_some(scaled_s)
+        let linear = last.is_some_and(|(last_done, last_ms)| {
+            ms / last_ms.max(1e-6) >= 0.5 * done as f64 / last_done as f64
+        });
+        if ms >= 20.0 && linear {
+            return Some(scaled);
+        }
+        (ms / 1e3 > self.enough_s).then_some(Estimate::AtLeast(ms / 1e3))
     }
 }
 
@@ -582,7 +607,7 @@ fn targets(req: &BenchRequest) -> Result<Vec<Target>> {
 
 #[cfg(test)]
 mod tests {
-    use super::Growth;
+    use super::{Estimate, Growth};
 
     /// A GPU-like device: time nearly flat while the thumbnails are smaller than the device
     /// holds, then linear. The estimate waits for the linear part.
@@ -591,24 +616,23 @@ mod tests {
         let mut g = Growth::new(100.0);
         assert_eq!(g.estimate(256, 262_144, 33.0), None, "one sample");
         assert_eq!(g.estimate(2_048, 262_144, 49.0), None, "not full yet");
-        let seconds = g.estimate(16_384, 262_144, 330.0).expect("linear now");
-        assert!((seconds - 330.0 * 16.0 / 1e3).abs() < 1e-9);
+        let e = g.estimate(16_384, 262_144, 330.0).expect("linear now");
+        assert!(matches!(e, Estimate::About(s) if (s - 330.0 * 16.0 / 1e3).abs() < 1e-9));
         // The whole work is its own estimate, however it grew.
         let mut g = Growth::new(100.0);
-        assert_eq!(g.estimate(100, 100, 5.0), Some(5.0 / 1e3));
+        assert_eq!(g.estimate(100, 100, 5.0), Some(Estimate::About(5.0 / 1e3)));
         // Short samples are not trusted even when linear.
         let mut g = Growth::new(100.0);
         g.estimate(10, 1000, 1.0);
         assert_eq!(g.estimate(80, 1000, 8.0), None);
     }
 
-    /// Sampling stops once one sample alone takes longer than a frame may.
+    /// Sampling stops once one sample alone takes longer than a frame may: that sample's
+    /// time is a lower bound, not a scaled guess.
     #[test]
     fn hopeless_work_stops_at_the_first_sample_over_the_limit() {
         let mut g = Growth::new(1.0);
-        let s = g
-            .estimate(1_000, 1_000_000, 1_500.0)
-            .expect("over the limit");
-        assert_eq!(s, 1_500.0);
+        let e = g.estimate(1_000, 1_000_000, 1_500.0);
+        assert_eq!(e, Some(Estimate::AtLeast(1.5)));
     }
 }
