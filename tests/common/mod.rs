@@ -4,14 +4,17 @@
 
 use std::path::PathBuf;
 
+use cltrace::bvh::{BuildOptions, Builder};
 use cltrace::camera::{Camera, Pinhole};
 use cltrace::device::{ClDevice, DeviceSelector};
 use cltrace::geometry::Ray;
 use cltrace::input::generate::Generator;
-use cltrace::layout::Triangle;
+use cltrace::layout::{FlatBvh, Triangle, triangles_in_order};
 use cltrace::mesh::Mesh;
 use cltrace::render::Frame;
+use cltrace::render::cpu::{BruteForce, ClosestHit};
 use cltrace::triangle::WatertightRay;
+use glam::Vec3;
 
 /// The device the OpenCL tests run on: `CLTRACE_DEVICE` if set, else the default (PoCL in CI).
 pub fn device() -> ClDevice {
@@ -102,4 +105,76 @@ pub fn coverage(frame: &Frame) -> usize {
 
 pub fn auto_camera(mesh: &Mesh, width: u32, height: u32) -> Camera {
     Camera::auto(&mesh.bounds(), width, height).unwrap()
+}
+
+/// A builder setting for the BVH tests.
+pub fn options(builder: Builder, bins: u32, max_leaf_size: u32) -> BuildOptions {
+    BuildOptions {
+        builder,
+        bins,
+        max_leaf_size,
+        ..Default::default()
+    }
+}
+
+pub fn all_options() -> Vec<BuildOptions> {
+    vec![
+        BuildOptions::default(),
+        options(Builder::Binned, 2, 1),
+        options(Builder::Binned, 16, 4),
+        options(Builder::Binned, 64, 255),
+        options(Builder::Sweep, 32, 8),
+        options(Builder::Sweep, 32, 1),
+    ]
+}
+
+/// Closest hits through the BVH equal brute force's: the same triangle, or an exact tie.
+pub fn same_hits(mesh: &Mesh, bvh: &FlatBvh, rays: &[Ray]) -> Result<(), String> {
+    let brute = BruteForce {
+        triangles: triangles_in_order(mesh, 0..mesh.triangle_count() as u32),
+    };
+    for (i, ray) in rays.iter().enumerate() {
+        let a = brute.closest_hit(ray, f32::INFINITY);
+        let b = bvh.closest_hit(ray, f32::INFINITY);
+        match (a, b) {
+            (None, None) => {}
+            (Some((ia, ta)), Some((ib, tb))) => {
+                let prim_b = bvh.triangles[ib].prim as usize;
+                let tie = ta == tb && hit_distance(ray, &brute.triangles[prim_b]).is_some();
+                if ia != prim_b && !tie {
+                    return Err(format!(
+                        "ray {i}: brute force hits {ia} at {ta}, the BVH {prim_b} at {tb}"
+                    ));
+                }
+                if ta != tb {
+                    return Err(format!(
+                        "ray {i}: triangle {ia} at {ta} by brute force, {tb} through the BVH"
+                    ));
+                }
+            }
+            (a, b) => return Err(format!("ray {i}: brute force {a:?}, BVH {b:?}")),
+        }
+    }
+    Ok(())
+}
+
+/// Rays from points around the mesh's box towards points inside it.
+pub fn rays_for(mesh: &Mesh, seed: u64, count: usize) -> Vec<Ray> {
+    let b = mesh.bounds();
+    let (c, r) = (b.center(), b.extent().length().max(1e-3));
+    let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    let mut unit = move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+    };
+    (0..count)
+        .map(|_| {
+            let from = c + Vec3::new(unit(), unit(), unit()) * r * 1.5;
+            let to = c + Vec3::new(unit(), unit(), unit()) * b.extent() * 0.5;
+            let dir = to - from;
+            Ray::new(from, if dir.length() > 0.0 { dir } else { Vec3::Z })
+        })
+        .collect()
 }
