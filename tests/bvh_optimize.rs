@@ -88,29 +88,12 @@ fn check_optimized(
     Ok((before, after))
 }
 
-fn mesh_strategy() -> impl Strategy<Value = Mesh> {
-    // Coordinates from a small set of values now and then, so that shared vertices,
-    // coincident centroids, flat boxes and zero-area triangles all occur.
-    let coord = prop_oneof![
-        4 => -10.0f32..10.0,
-        1 => prop::sample::select(vec![0.0f32, 1.0, -1.0, 2.5]),
-    ];
-    let corner = [coord.clone(), coord.clone(), coord].prop_map(Vec3::from);
-    prop::collection::vec([corner.clone(), corner.clone(), corner], 1..200).prop_map(|tris| {
-        let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
-        let triangles = (0..tris.len() as u32)
-            .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
-            .collect();
-        Mesh::new(positions, triangles)
-    })
-}
-
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
 
     #[test]
     fn random_meshes_optimize_to_valid_cheaper_trees_with_brute_force_hits(
-        mesh in mesh_strategy(),
+        mesh in mesh_strategy(200),
         seed in any::<u64>(),
         max_depth in 4u32..=MAX_DEPTH,
     ) {
@@ -123,35 +106,6 @@ proptest! {
             }
         }
     }
-}
-
-fn test_scenes() -> Vec<(String, Mesh)> {
-    let mut scenes: Vec<(String, Mesh)> = [
-        Generator::Soup {
-            triangles: 5000,
-            seed: 11,
-        },
-        Generator::Sphere { subdivisions: 4 },
-        Generator::Landscape {
-            resolution: 64,
-            seed: 5,
-        },
-        Generator::NestedBoxes { count: 20 },
-        Generator::Sphereflake {
-            levels: 2,
-            subdivisions: 1,
-            ground: 32,
-        },
-    ]
-    .into_iter()
-    .map(|g| (g.name(), generate(g)))
-    .collect();
-    for name in ["stanford_bunny.obj", "utah_teapot.obj"] {
-        if let Some(path) = shared_scene(name) {
-            scenes.push((name.to_string(), load_mesh(&path).unwrap()));
-        }
-    }
-    scenes
 }
 
 #[test]

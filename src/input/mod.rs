@@ -100,14 +100,7 @@ fn parse(
         bytes
     };
     let file = match format {
-        MeshFormat::Obj => {
-            let obj = obj::parse(path, bytes, read_materials)?;
-            MeshFile {
-                mesh: obj.mesh,
-                materials: obj.materials,
-                warning: obj.warning,
-            }
-        }
+        MeshFormat::Obj => obj::parse(path, bytes, read_materials)?,
         MeshFormat::Ply => MeshFile {
             mesh: ply::parse(path, bytes)?,
             materials: Materials::default(),

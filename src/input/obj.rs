@@ -7,22 +7,14 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::{mtl, quoted};
+use super::{MeshFile, mtl, quoted};
 use crate::error::{Error, Result};
 use crate::material::Materials;
 use crate::mesh::{Mesh, coordinate_problem};
 
-/// An OBJ file's mesh and, when asked for, its materials.
-pub(super) struct ObjFile {
-    pub mesh: Mesh,
-    pub materials: Materials,
-    /// Why the materials are grey although the file names some (a missing or broken MTL).
-    pub warning: Option<String>,
-}
-
 /// Parses an OBJ file's bytes; `path` names it in errors and locates its `mtllib` files.
 /// Without `read_materials` no MTL file is opened and every triangle is grey.
-pub(super) fn parse(path: &Path, bytes: &[u8], read_materials: bool) -> Result<ObjFile> {
+pub(super) fn parse(path: &Path, bytes: &[u8], read_materials: bool) -> Result<MeshFile> {
     // A UTF-8 byte order mark would hide the first line's keyword from tobj, and a first
     // `v` line dropped that way shifts every index after it.
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
@@ -71,7 +63,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8], read_materials: bool) -> Result<O
         true => mtl::assign(&models, library, path),
         false => (Materials::default(), None),
     };
-    Ok(ObjFile {
+    Ok(MeshFile {
         mesh,
         materials,
         warning,

@@ -185,7 +185,7 @@ pub fn facing_normal(t: &Triangle, dir: Vec3) -> Vec3 {
 
 /// One sample of pixel (x, y): its radiance and the number of rays traced for it.
 pub fn sample_pixel(
-    tracer: &impl ClosestHit,
+    tracer: &(impl ClosestHit + ?Sized),
     materials: &[Material],
     emitters: &Emitters,
     camera: &Pinhole,
@@ -348,7 +348,7 @@ impl Accumulation {
 /// work after the rows under way; each pixel keeps the samples it got.
 #[allow(clippy::too_many_arguments)]
 pub fn render_samples(
-    tracer: &impl ClosestHit,
+    tracer: &(impl ClosestHit + ?Sized),
     materials: &[Material],
     emitters: &Emitters,
     camera: &Pinhole,

@@ -417,18 +417,7 @@ impl<'d> ClTracer<'d> {
                 while y0 < group0 + group_rows {
                     let rows = self.sample_bands.next_rows(w, group0 + group_rows - y0);
                     set(row_end_arg, (y0 + rows) as u32)?;
-                    let global = [
-                        w.div_ceil(local[0]) * local[0],
-                        rows.div_ceil(local[1]) * local[1],
-                    ];
-                    let ms = launch(
-                        device,
-                        kernel
-                            .cmd()
-                            .global_work_offset([0, y0])
-                            .global_work_size(global)
-                            .local_work_size(local),
-                    )?;
+                    let ms = launch_rows(device, &kernel, local, w, y0, rows)?;
                     times.kernel_ms += ms;
                     times.launches += 1;
                     self.sample_bands.learn(rows * w, ms);
@@ -525,17 +514,7 @@ impl<'d> ClTracer<'d> {
             // Work-items past the band (the global size is rounded up) return at once.
             set(a + 5, k.set_arg(a + 5, y0 as u32))?;
             set(a + 6, k.set_arg(a + 6, (y0 + rows) as u32))?;
-            let global = [
-                w.div_ceil(local[0]) * local[0],
-                rows.div_ceil(local[1]) * local[1],
-            ];
-            let ms = launch(
-                device,
-                k.cmd()
-                    .global_work_offset([0, y0])
-                    .global_work_size(global)
-                    .local_work_size(local),
-            )?;
+            let ms = launch_rows(device, k, local, w, y0, rows)?;
             times.kernel_ms += ms;
             times.launches += 1;
             self.bands.learn(rows * w, ms);
@@ -695,6 +674,30 @@ fn kernel_builder<'b>(
 }
 
 /// Enqueues a kernel, waits for it, and returns its device time in milliseconds.
+/// Launches an image kernel over rows `y0 .. y0 + rows` of a `width`-pixel image, the
+/// global size rounded up to whole work-groups; returns its device time in ms.
+fn launch_rows(
+    device: &ClDevice,
+    kernel: &ocl::Kernel,
+    local: [usize; 2],
+    width: usize,
+    y0: usize,
+    rows: usize,
+) -> Result<f64> {
+    let global = [
+        width.div_ceil(local[0]) * local[0],
+        rows.div_ceil(local[1]) * local[1],
+    ];
+    launch(
+        device,
+        kernel
+            .cmd()
+            .global_work_offset([0, y0])
+            .global_work_size(global)
+            .local_work_size(local),
+    )
+}
+
 fn launch(device: &ClDevice, cmd: ocl::builders::KernelCmd) -> Result<f64> {
     let mut event = ocl::Event::empty();
     unsafe {

@@ -252,36 +252,22 @@ impl<'d> Renderer<'d> {
                 }
             }
             tracer => {
+                let host = tracer.host().expect("the OpenCL tracer is handled above");
                 for s in samples {
                     if stop.load(std::sync::atomic::Ordering::Relaxed) {
                         break;
                     }
-                    let (materials, emitters) = (&self.materials, &self.emitters);
-                    match &*tracer {
-                        Tracer::CpuBrute(t) => integrator::render_samples(
-                            t,
-                            materials,
-                            emitters,
-                            &pinhole,
-                            camera.width,
-                            settings,
-                            s..s + 1,
-                            accumulation,
-                            stop,
-                        ),
-                        Tracer::CpuBvh(t) => integrator::render_samples(
-                            t,
-                            materials,
-                            emitters,
-                            &pinhole,
-                            camera.width,
-                            settings,
-                            s..s + 1,
-                            accumulation,
-                            stop,
-                        ),
-                        Tracer::Cl(_) => unreachable!("handled above"),
-                    }
+                    integrator::render_samples(
+                        host,
+                        &self.materials,
+                        &self.emitters,
+                        &pinhole,
+                        camera.width,
+                        settings,
+                        s..s + 1,
+                        accumulation,
+                        stop,
+                    );
                     if let Some(b) = &bar {
                         b.inc(1);
                         b.set_message(mrays(start, accumulation.rays - rays_before));
@@ -323,31 +309,8 @@ impl<'d> Renderer<'d> {
         t_max: f32,
         any_hit: bool,
     ) -> Result<(Vec<Hit>, TraceTimes)> {
-        fn host(
-            tracer: &impl cpu::ClosestHit,
-            rays: &[Ray],
-            t_max: f32,
-            any_hit: bool,
-        ) -> Vec<Hit> {
-            rays.par_iter()
-                .with_min_len(1024)
-                .map(|ray| match tracer.trace(ray, t_max, any_hit) {
-                    None => Hit::NONE,
-                    Some((i, t)) => Hit {
-                        prim: tracer.triangles()[i].prim,
-                        t: t * ray.dir.length(),
-                    },
-                })
-                .collect()
-        }
         let start = std::time::Instant::now();
-        let host_times = |start: std::time::Instant| TraceTimes {
-            trace_ms: start.elapsed().as_secs_f64() * 1e3,
-            read_back_ms: 0.0,
-        };
         Ok(match &mut self.tracer {
-            Tracer::CpuBrute(t) => (host(t, rays, t_max, any_hit), host_times(start)),
-            Tracer::CpuBvh(t) => (host(t, rays, t_max, any_hit), host_times(start)),
             Tracer::Cl(t) => {
                 let (hits, device) = t.trace_rays_timed(rays, t_max, any_hit)?;
                 (
@@ -358,7 +321,37 @@ impl<'d> Renderer<'d> {
                     },
                 )
             }
+            tracer => {
+                let host = tracer.host().expect("the OpenCL tracer is handled above");
+                let hits = rays
+                    .par_iter()
+                    .with_min_len(1024)
+                    .map(|ray| match host.trace(ray, t_max, any_hit) {
+                        None => Hit::NONE,
+                        Some((i, t)) => Hit {
+                            prim: host.triangles()[i].prim,
+                            t: t * ray.dir.length(),
+                        },
+                    })
+                    .collect();
+                let times = TraceTimes {
+                    trace_ms: start.elapsed().as_secs_f64() * 1e3,
+                    read_back_ms: 0.0,
+                };
+                (hits, times)
+            }
         })
+    }
+}
+
+impl Tracer<'_> {
+    /// The host tracer of the CPU methods (`None` for OpenCL).
+    fn host(&self) -> Option<&dyn cpu::ClosestHit> {
+        match self {
+            Tracer::CpuBrute(t) => Some(t),
+            Tracer::CpuBvh(t) => Some(t),
+            Tracer::Cl(_) => None,
+        }
     }
 }
 

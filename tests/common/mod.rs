@@ -9,12 +9,14 @@ use cltrace::camera::{Camera, Pinhole};
 use cltrace::device::{ClDevice, DeviceSelector};
 use cltrace::geometry::Ray;
 use cltrace::input::generate::Generator;
+use cltrace::input::load_mesh;
 use cltrace::layout::{FlatBvh, Triangle, triangles_in_order};
 use cltrace::mesh::Mesh;
 use cltrace::render::Frame;
 use cltrace::render::cpu::{BruteForce, ClosestHit};
 use cltrace::triangle::WatertightRay;
 use glam::Vec3;
+use proptest::prelude::*;
 
 /// The device the OpenCL tests run on: `CLTRACE_DEVICE` if set, else the default (PoCL in CI).
 pub fn device() -> ClDevice {
@@ -177,4 +179,54 @@ pub fn rays_for(mesh: &Mesh, seed: u64, count: usize) -> Vec<Ray> {
             Ray::new(from, if dir.length() > 0.0 { dir } else { Vec3::Z })
         })
         .collect()
+}
+
+/// Random triangle soups of 1 to `max_triangles - 1` triangles.
+pub fn mesh_strategy(max_triangles: usize) -> impl Strategy<Value = Mesh> {
+    // Coordinates from a small set of values now and then, so that shared vertices,
+    // coincident centroids, flat boxes and zero-area triangles all occur.
+    let coord = prop_oneof![
+        4 => -10.0f32..10.0,
+        1 => prop::sample::select(vec![0.0f32, 1.0, -1.0, 2.5]),
+    ];
+    let corner = [coord.clone(), coord.clone(), coord].prop_map(Vec3::from);
+    prop::collection::vec([corner.clone(), corner.clone(), corner], 1..max_triangles).prop_map(
+        |tris| {
+            let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
+            let triangles = (0..tris.len() as u32)
+                .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+                .collect();
+            Mesh::new(positions, triangles)
+        },
+    )
+}
+
+/// The generated test scenes, and the bunny and teapot when the shared meshes are there.
+pub fn test_scenes() -> Vec<(String, Mesh)> {
+    let mut scenes: Vec<(String, Mesh)> = [
+        Generator::Soup {
+            triangles: 5000,
+            seed: 11,
+        },
+        Generator::Sphere { subdivisions: 4 },
+        Generator::Landscape {
+            resolution: 64,
+            seed: 5,
+        },
+        Generator::NestedBoxes { count: 20 },
+        Generator::Sphereflake {
+            levels: 2,
+            subdivisions: 1,
+            ground: 32,
+        },
+    ]
+    .into_iter()
+    .map(|g| (g.name(), generate(g)))
+    .collect();
+    for name in ["stanford_bunny.obj", "utah_teapot.obj"] {
+        if let Some(path) = shared_scene(name) {
+            scenes.push((name.to_string(), load_mesh(&path).unwrap()));
+        }
+    }
+    scenes
 }
