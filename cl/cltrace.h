@@ -63,6 +63,20 @@ typedef struct {
     uint child[8], count[8];
 } Wide8Node;
 
+/* A compressed 8-wide node (Ylitie et al. 2017; src/layout/compressed.rs): slot k's box on
+ * axis a is origin[a] + q * 2^(exponent[a] - 127) for q = lo_a[k] and hi_a[k]. Inner
+ * children are contiguous from child_base in slot order (inner_mask bit k: slot k is inner);
+ * leaf children's triangles are contiguous from triangle_base. meta[k]: 0 empty; inner
+ * 0x38 | k; a leaf of n triangles (2^n - 1) << 5 | offset from triangle_base. */
+typedef struct {
+    float origin[3];
+    uchar exponent[3]; uchar inner_mask;
+    uint child_base;
+    uint triangle_base;
+    uchar meta[8];
+    uchar lo_x[8], lo_y[8], lo_z[8], hi_x[8], hi_y[8], hi_z[8];
+} CompressedNode;
+
 /* One pixel's closest hit: the triangle's index in file order (MISS for none) and the
  * distance from the eye along the ray (+inf for a miss). */
 typedef struct {
@@ -162,7 +176,7 @@ FORCE_INLINE float intersect_stored(const WatertightRay* r, const __global Trian
 #define STATUS_STACK_OVERFLOW 1u
 
 /* LAYOUT selects the node format of a BVH program: 32 (the thesis's node, the default),
- * 64 (Aila-Laine), 4 or 8 (wide). */
+ * 64 (Aila-Laine), 4 or 8 (wide), 80 (compressed 8-wide). */
 #if defined(STACK_SIZE) && !defined(LAYOUT)
 #define LAYOUT 32
 #endif
@@ -176,8 +190,10 @@ FORCE_INLINE float intersect_stored(const WatertightRay* r, const __global Trian
 #define NODE Wide4Node
 #elif LAYOUT == 8
 #define NODE Wide8Node
+#elif LAYOUT == 80
+#define NODE CompressedNode
 #else
-#error "LAYOUT must be 32, 64, 4 or 8"
+#error "LAYOUT must be 32, 64, 4, 8 or 80"
 #endif
 #ifndef STACK_SIZE
 #error "a BVH program needs STACK_SIZE"
@@ -410,6 +426,104 @@ FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool 
         if (next != EMPTY_SLOT && next_entry <= t) {
             node = next;
         } else POP_OR_BREAK
+    }
+    *t_hit = t;
+    return best;
+}
+
+#elif defined(LAYOUT) && LAYOUT == 80
+
+/* Byte k of the 8 bytes (lo, hi), as a float. */
+FORCE_INLINE float byte_of(uint lo, uint hi, uint k) {
+    return (float)(((k < 4u ? lo : hi) >> (8u * (k & 3u))) & 0xFFu);
+}
+
+/* Compressed wide traversal (after Ylitie et al. 2017): a node visit tests all 8 child
+ * boxes and yields a node group (the children still to visit, as bits) and the leaf
+ * triangles hit (as bits); the current group's remainder is pushed as one stack entry, so
+ * the stack holds one entry per level. Same contract as the LAYOUT 32 trace.
+ *
+ * Slot s's child lies towards corner s of its parent (bits x, y, z set: the maximum
+ * side), and a ray meets first the corner of its negative direction components. Inner
+ * children hit go to bit 24 + (s ^ order) and are visited from the highest bit down:
+ * roughly front to back. */
+FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
+    WatertightRay ray = watertight_ray(org, dir);
+    float3 inv = safe_inverse(dir);
+    uint order = 7u ^ ((signbit(dir.x) ? 4u : 0u) | (signbit(dir.y) ? 2u : 0u) | (signbit(dir.z) ? 1u : 0u));
+    float t = t_max;
+    uint best = MISS;
+    uint2 stack[STACK_SIZE];
+    uint sp = 0;
+    /* A node group: .x its first node, .y the children to visit (bits 24-31) over their
+     * parent's inner mask (bits 0-7). The root is a group of one with an empty mask. */
+    uint2 group = (uint2)(0u, 0x80000000u);
+    for (;;) {
+        uint tri_base = 0u, tri_hits = 0u;
+        if (group.y > 0x00FFFFFFu) {
+            uint bit = 31u - clz(group.y);
+            group.y &= ~(1u << bit);
+            uint slot = (bit - 24u) ^ order;
+            uint index = group.x + popcount(group.y & ((1u << slot) - 1u));
+            if (group.y > 0x00FFFFFFu) {
+                if (sp >= STACK_SIZE) { atomic_or(status, STATUS_STACK_OVERFLOW); return MISS; }
+                stack[sp++] = group;
+            }
+            const __global uint4* row = (const __global uint4*)&nodes[index];
+            uint4 r0 = row[0], r1 = row[1], r2 = row[2], r3 = row[3], r4 = row[4];
+            float3 origin = (float3)(as_float(r0.x), as_float(r0.y), as_float(r0.z));
+            float3 scale = (float3)(as_float((r0.w & 0xFFu) << 23), as_float(((r0.w >> 8) & 0xFFu) << 23),
+                                    as_float(((r0.w >> 16) & 0xFFu) << 23));
+            /* Plane q of an axis lies at q * a + b along the ray: one fused multiply-add per
+             * plane instead of dequantizing first (measured 20-30% faster on the H100). The
+             * rounding of a, b, the fma and the shift below stays under
+             * 7 FLT_EPSILON (255 |a| + |b|), so moving near planes nearer and far planes
+             * farther by 8 FLT_EPSILON (255 |a| + |b|) keeps the test conservative; the
+             * host mirrors it in CompressedNode::fused_box_test and tests the bound. An
+             * infinite inverse makes that axis NaN, which fmin and fmax skip: the slab then
+             * never culls, as in box_entry. */
+            float3 a = scale * inv;
+            float3 b = (origin - org) * inv;
+            float3 err = (255.0f * fabs(a) + fabs(b)) * (8.0f * FLT_EPSILON) + FLT_MIN;
+            float3 b_near = b - err, b_far = b + err;
+            /* Each axis's near planes are its lo bytes for a positive direction, hi bytes for
+             * a negative one. */
+            uint2 nx = signbit(inv.x) ? r3.zw : r2.xy, fx = signbit(inv.x) ? r2.xy : r3.zw;
+            uint2 ny = signbit(inv.y) ? r4.xy : r2.zw, fy = signbit(inv.y) ? r2.zw : r4.xy;
+            uint2 nz = signbit(inv.z) ? r4.zw : r3.xy, fz = signbit(inv.z) ? r3.xy : r4.zw;
+            uint hits = 0u;
+#pragma unroll
+            for (uint k = 0; k < 8u; ++k) {
+                float near = fmax(fmax(fma(byte_of(nx.x, nx.y, k), a.x, b_near.x),
+                                       fma(byte_of(ny.x, ny.y, k), a.y, b_near.y)),
+                                  fmax(fma(byte_of(nz.x, nz.y, k), a.z, b_near.z), 0.0f));
+                float far = fmin(fmin(fma(byte_of(fx.x, fx.y, k), a.x, b_far.x),
+                                      fma(byte_of(fy.x, fy.y, k), a.y, b_far.y)),
+                                 fmin(fma(byte_of(fz.x, fz.y, k), a.z, b_far.z), t));
+                /* An empty slot's meta is 0: whatever its box, it sets no bit. */
+                uint meta = ((k < 4u ? r1.z : r1.w) >> (8u * (k & 3u))) & 0xFFu;
+                if (near <= far) {
+                    hits |= (meta & 0x18u) == 0x18u ? 1u << (24u + (k ^ order)) : (meta >> 5) << (meta & 0x1Fu);
+                }
+            }
+            group = (uint2)(r1.x, (hits & 0xFF000000u) | (r0.w >> 24));
+            tri_base = r1.y;
+            tri_hits = hits & 0x00FFFFFFu;
+        }
+        while (tri_hits != 0u) {
+            uint i = tri_base + (31u - clz(tri_hits & (0u - tri_hits)));
+            tri_hits &= tri_hits - 1u;
+            float h = intersect_stored(&ray, &tris[i], t);
+            if (h >= 0.0f) {
+                t = h;
+                best = i;
+                if (any_hit) { *t_hit = t; return best; }
+            }
+        }
+        if (group.y <= 0x00FFFFFFu) {
+            if (sp == 0) break;
+            group = stack[--sp];
+        }
     }
     *t_hit = t;
     return best;

@@ -12,6 +12,7 @@ __kernel void probe_layout(__global uint* out) {
     Bvh64Node probe_Bvh64Node;
     Wide4Node probe_Wide4Node;
     Wide8Node probe_Wide8Node;
+    CompressedNode probe_CompressedNode;
     uint i = 0;
     out[i++] = sizeof(Triangle);
     out[i++] = OFFSET(Triangle, v0);
@@ -42,4 +43,13 @@ __kernel void probe_layout(__global uint* out) {
     out[i++] = OFFSET(Wide8Node, max_z);
     out[i++] = OFFSET(Wide8Node, child);
     out[i++] = OFFSET(Wide8Node, count);
+    out[i++] = sizeof(CompressedNode);
+    out[i++] = OFFSET(CompressedNode, exponent);
+    out[i++] = OFFSET(CompressedNode, inner_mask);
+    out[i++] = OFFSET(CompressedNode, child_base);
+    out[i++] = OFFSET(CompressedNode, triangle_base);
+    out[i++] = OFFSET(CompressedNode, meta);
+    out[i++] = OFFSET(CompressedNode, lo_x);
+    out[i++] = OFFSET(CompressedNode, hi_x);
+    out[i++] = OFFSET(CompressedNode, hi_z);
 }

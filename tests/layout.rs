@@ -7,6 +7,7 @@ use std::mem::{offset_of, size_of};
 
 use cltrace::device::KernelSource;
 use cltrace::layout::aila::Bvh64Node;
+use cltrace::layout::compressed::CompressedNode;
 use cltrace::layout::wide::{Wide4Node, Wide8Node};
 use cltrace::layout::{BvhNode, Triangle};
 use cltrace::material::Material;
@@ -47,6 +48,27 @@ fn device_structs_match_the_rust_structs() {
         ("Wide8Node.max_z", offset_of!(Wide8Node, max_z)),
         ("Wide8Node.child", offset_of!(Wide8Node, child)),
         ("Wide8Node.count", offset_of!(Wide8Node, count)),
+        ("sizeof(CompressedNode)", size_of::<CompressedNode>()),
+        (
+            "CompressedNode.exponent",
+            offset_of!(CompressedNode, exponent),
+        ),
+        (
+            "CompressedNode.inner_mask",
+            offset_of!(CompressedNode, inner_mask),
+        ),
+        (
+            "CompressedNode.child_base",
+            offset_of!(CompressedNode, child_base),
+        ),
+        (
+            "CompressedNode.triangle_base",
+            offset_of!(CompressedNode, triangle_base),
+        ),
+        ("CompressedNode.meta", offset_of!(CompressedNode, meta)),
+        ("CompressedNode.lo_x", offset_of!(CompressedNode, lo_x)),
+        ("CompressedNode.hi_x", offset_of!(CompressedNode, hi_x)),
+        ("CompressedNode.hi_z", offset_of!(CompressedNode, hi_z)),
     ];
     // The thesis's node is 32 bytes; a triangle is three 16-byte corners.
     assert_eq!(size_of::<BvhNode>(), 32);
@@ -54,6 +76,9 @@ fn device_structs_match_the_rust_structs() {
     assert_eq!(size_of::<Hit>(), 8);
     assert_eq!(size_of::<Bvh64Node>(), 64);
     assert_eq!((size_of::<Wide4Node>(), size_of::<Wide8Node>()), (128, 256));
+    // Five 16-byte rows, read as vectors by the kernel.
+    assert_eq!(size_of::<CompressedNode>(), 80);
+    assert_eq!(offset_of!(CompressedNode, lo_x), 32);
 
     let device = common::device();
     let program = device.build(KernelSource::Probe, &[]).unwrap();

@@ -13,6 +13,9 @@ const INCLUDE_LINE: &str = "#include \"cltrace.h\"";
 const KERNEL_DIR_VAR: &str = "CLTRACE_KERNEL_DIR";
 /// Extra OpenCL build options, appended to cltrace's own (development, e.g. vendor flags).
 const BUILD_OPTIONS_VAR: &str = "CLTRACE_BUILD_OPTIONS";
+/// When set, every successful build's log goes to stderr too (development: with
+/// `-cl-nv-verbose` NVIDIA's log gives each kernel's registers and spills).
+const BUILD_LOG_VAR: &str = "CLTRACE_BUILD_LOG";
 
 /// A kernel file of `cl/`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -124,20 +127,24 @@ impl ClDevice {
                 std::ptr::null_mut(),
             )
         };
+        let log = || match ocl::core::get_program_build_info(
+            &program,
+            self.info.device.as_core(),
+            ocl::core::ProgramBuildInfo::BuildLog,
+        ) {
+            Ok(log) => log.to_string(),
+            Err(e) => format!("(no build log: {e})"),
+        };
         if status != 0 {
-            let log = match ocl::core::get_program_build_info(
-                &program,
-                self.info.device.as_core(),
-                ocl::core::ProgramBuildInfo::BuildLog,
-            ) {
-                Ok(log) => log.to_string(),
-                Err(e) => format!("(no build log: {e})"),
-            };
+            let log = log();
             return Err(Error::Device(format!(
                 "kernel {name} failed to build on {} (OpenCL status {status}); build log:\n{}",
                 self.info.name,
                 log.trim_end()
             )));
+        }
+        if std::env::var_os(BUILD_LOG_VAR).is_some() {
+            eprintln!("build log of {name} ({options:?}):\n{}", log().trim_end());
         }
         Ok(ocl::Program::from(program))
     }

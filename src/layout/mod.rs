@@ -1,10 +1,11 @@
 //! Device layouts: the flat arrays the kernels read, as `#[repr(C)]` structs mirrored in
 //! `cl/cltrace.h` (tests/layout.rs pins sizes and offsets on both sides). The thesis's
 //! 32-byte binary layout ([`FlatBvh`]) is the builder's output and the reference; the
-//! others are made from it: [`aila`] (both child boxes in the parent) and [`wide`] (4- and
-//! 8-wide nodes).
+//! others are made from it: [`aila`] (both child boxes in the parent), [`wide`] (4- and
+//! 8-wide nodes) and [`compressed`] (8-wide nodes with quantized boxes).
 
 pub mod aila;
+pub mod compressed;
 pub mod wide;
 
 use bytemuck::{Pod, Zeroable};
@@ -140,10 +141,19 @@ pub enum Layout {
     Wide4,
     /// 8-wide nodes (256 bytes), collapsed from the binary tree.
     Wide8,
+    /// Compressed 8-wide nodes (80 bytes, child boxes quantized to 8 bits; Ylitie et al.
+    /// 2017), leaves of at most 3 triangles.
+    Cwbvh,
 }
 
 impl Layout {
-    pub const ALL: [Layout; 4] = [Layout::Bin32, Layout::Bin64, Layout::Wide4, Layout::Wide8];
+    pub const ALL: [Layout; 5] = [
+        Layout::Bin32,
+        Layout::Bin64,
+        Layout::Wide4,
+        Layout::Wide8,
+        Layout::Cwbvh,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -151,6 +161,7 @@ impl Layout {
             Layout::Bin64 => "bin64",
             Layout::Wide4 => "wide4",
             Layout::Wide8 => "wide8",
+            Layout::Cwbvh => "cwbvh",
         }
     }
 
@@ -161,6 +172,7 @@ impl Layout {
             Layout::Bin64 => 64,
             Layout::Wide4 => 4,
             Layout::Wide8 => 8,
+            Layout::Cwbvh => 80,
         }
     }
 }
@@ -175,7 +187,8 @@ pub struct DeviceLayout {
     pub node_count: usize,
     pub triangles: Vec<Triangle>,
     /// Entries the traversal stack needs: the depth for binary layouts, (width - 1) per
-    /// level of a wide tree.
+    /// level of a wide tree, one per level of a compressed one (a node's unvisited children
+    /// share one entry).
     pub stack_size: u32,
     /// The SAH cost of the tree as laid out (wide nodes count one traversal step each).
     pub sah_cost: f64,
@@ -185,6 +198,8 @@ impl DeviceLayout {
     /// Lays the thesis-layout tree out as `layout`; `sah_cost` is the binary tree's.
     pub fn new(flat: FlatBvh, layout: Layout, sah_cost: f64) -> Self {
         let depth = flat.depth.max(1);
+        // The compressed layout reorders the triangles; the others keep the tree's order.
+        let mut reordered = None;
         let (nodes, node_count, stack_size, sah_cost) = match layout {
             Layout::Bin32 => (
                 bytemuck::cast_slice(&flat.nodes).to_vec(),
@@ -214,12 +229,22 @@ impl DeviceLayout {
                     c.sah_cost,
                 )
             }
+            Layout::Cwbvh => {
+                let c = compressed::compress(&flat);
+                reordered = Some(c.triangles);
+                (
+                    bytemuck::cast_slice(&c.nodes).to_vec(),
+                    c.nodes.len(),
+                    c.depth + 1,
+                    c.sah_cost,
+                )
+            }
         };
         DeviceLayout {
             layout,
             nodes,
             node_count,
-            triangles: flat.triangles,
+            triangles: reordered.unwrap_or(flat.triangles),
             stack_size,
             sah_cost,
         }

@@ -128,7 +128,6 @@ impl<'d> Renderer<'d> {
             }
             (Method::ClBvh, Some(flat)) => {
                 let device = device();
-                let emitters = Emitters::new(&flat.triangles, &materials.list);
                 let sah = bvh.map_or(0.0, |s| s.sah_cost);
                 let tuned = crate::tune::cached(&device.info);
                 let layout = options
@@ -136,6 +135,8 @@ impl<'d> Renderer<'d> {
                     .or(tuned.as_ref().map(|t| t.layout))
                     .unwrap_or_else(|| crate::tune::default_layout(&device.info));
                 let laid = timings.time("layout", || DeviceLayout::new(flat, layout, sah));
+                // After the layout: the compressed one reorders the triangles.
+                let emitters = Emitters::new(&laid.triangles, &materials.list);
                 let program = timings.time("compile", || {
                     ClTracer::compile(device, Some((laid.layout, laid.stack_size)), sampling)
                 })?;
