@@ -113,7 +113,7 @@ struct BenchArgs {
         long,
         value_enum,
         value_delimiter = ',',
-        default_value = "bin32,bin64,wide4,wide8"
+        default_value = "bin32,bin64,wide4,wide8,cwbvh"
     )]
     layouts: Vec<Layout>,
 
