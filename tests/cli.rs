@@ -629,3 +629,57 @@ fn help_mentions_device_and_examples() {
     // help writes nothing into the folder
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
+
+#[test]
+fn bvh_reports_every_layout() {
+    // A 20 x 20 height field: 800 triangles.
+    let mut obj = String::new();
+    for y in 0..=20 {
+        for x in 0..=20 {
+            obj += &format!("v {x} {y} {}\n", ((x * 7 + y * 3) % 5) as f32 * 0.3);
+        }
+    }
+    for y in 0..20 {
+        for x in 0..20 {
+            let i = y * 21 + x + 1;
+            obj += &format!(
+                "f {} {} {}\nf {} {} {}\n",
+                i,
+                i + 1,
+                i + 22,
+                i,
+                i + 22,
+                i + 21
+            );
+        }
+    }
+    let w = Work::new();
+    let mesh = w.write("grid.obj", &obj);
+    let out = run(cltrace(&w.input, &[OsStr::new("bvh"), mesh.as_os_str()]));
+    succeeded(&out);
+    let report = text(&out.stdout);
+    assert!(report.contains("triangles             800"), "{report}");
+    // Each layout's row: name, nodes, SAH cost, bytes per triangle, time.
+    let row = |name: &str| -> (u64, f64, f64) {
+        let line = report
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(name))
+            .unwrap_or_else(|| panic!("no {name} row in\n{report}"));
+        let f: Vec<&str> = line.split_whitespace().collect();
+        (
+            f[1].parse().unwrap(),
+            f[2].parse().unwrap(),
+            f[3].parse().unwrap(),
+        )
+    };
+    let (bin32, bin64, wide8, cwbvh) = (row("bin32"), row("bin64"), row("wide8"), row("cwbvh"));
+    for (nodes, sah, bytes) in [bin32, bin64, row("wide4"), wide8, cwbvh] {
+        assert!(nodes > 0 && sah > 0.0 && bytes > 48.0, "{report}");
+    }
+    // Both children's boxes in one node: half the nodes, the same tree.
+    assert_eq!(bin64.0 * 2 + 1, bin32.0, "{report}");
+    assert_eq!(bin64.1, bin32.1, "{report}");
+    // Wide nodes cut the SAH cost; quantized ones the bytes.
+    assert!(wide8.1 < bin32.1 && cwbvh.1 < bin32.1, "{report}");
+    assert!(cwbvh.2 < wide8.2 && cwbvh.2 < bin32.2, "{report}");
+}

@@ -6,7 +6,7 @@ use std::path::Path;
 use crate::bvh::{BuildOptions, Bvh, INTERSECTION_COST, TRAVERSAL_COST};
 use crate::commands::render::describe_scene;
 use crate::error::Result;
-use crate::layout::FlatBvh;
+use crate::layout::{DeviceLayout, FlatBvh, Layout};
 use crate::report::{Timings, format_ms};
 
 /// Loads the scene's mesh, builds its BVH `repeat` times (the fastest build is reported)
@@ -47,9 +47,16 @@ pub fn bvh_report(scene: Option<&Path>, options: &BuildOptions, repeat: u32) -> 
         (report, ms)
     });
     let s = bvh.stats();
-    let layout_start = std::time::Instant::now();
     let flat = FlatBvh::new(bvh, &mesh);
-    let layout_ms = layout_start.elapsed().as_secs_f64() * 1e3;
+    // Every device layout made from the tree, with what it costs to make and to hold.
+    let layouts: Vec<(DeviceLayout, f64)> = Layout::ALL
+        .iter()
+        .map(|&layout| {
+            let start = std::time::Instant::now();
+            let laid = DeviceLayout::new(flat.clone(), layout, s.sah_cost);
+            (laid, start.elapsed().as_secs_f64() * 1e3)
+        })
+        .collect();
 
     let mut out = String::new();
     let mut line = |k: &str, v: String| writeln!(out, "{k:<22}{v}").expect("writing to a String");
@@ -114,11 +121,24 @@ pub fn bvh_report(scene: Option<&Path>, options: &BuildOptions, repeat: u32) -> 
             ),
         );
     }
-    line("layout time", format_ms(layout_ms));
     line("load time", format_ms(timings.get("load").unwrap_or(0.0)));
-    line(
-        "device bytes/triangle",
-        format!("{:.1}", flat.bytes_per_triangle()),
-    );
+    writeln!(
+        out,
+        "\n{:<8}{:>10}{:>10}{:>16}{:>13}",
+        "layout", "nodes", "SAH cost", "bytes/triangle", "layout time"
+    )
+    .expect("writing to a String");
+    for (laid, ms) in &layouts {
+        writeln!(
+            out,
+            "{:<8}{:>10}{:>10.3}{:>16.1}{:>13}",
+            laid.layout.name(),
+            laid.node_count,
+            laid.sah_cost,
+            laid.bytes_per_triangle(),
+            format_ms(*ms)
+        )
+        .expect("writing to a String");
+    }
     Ok(out)
 }

@@ -325,19 +325,22 @@ fn slots(tree: &[Binary], children: Vec<usize>, centre: Vec3) -> [Option<usize>;
             if s & 1 != 0 { 1.0 } else { -1.0 },
         )
     };
-    let mut pairs: Vec<(f32, usize, usize)> = Vec::with_capacity(64);
+    let mut pairs = [(f32::MIN, 0usize, 0usize); 64];
+    let mut len = 0;
     for (i, &c) in children.iter().enumerate() {
         let offset = tree[c].centre() - centre;
         for s in 0..8 {
             // A NaN pull (no finite centre) sorts last, never panics.
             let pull = offset.dot(corner(s));
-            pairs.push((if pull.is_nan() { f32::MIN } else { pull }, i, s));
+            pairs[len] = (if pull.is_nan() { f32::MIN } else { pull }, i, s);
+            len += 1;
         }
     }
-    pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let pairs = &mut pairs[..len];
+    pairs.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
     let mut out = [None; 8];
     let mut placed = [false; 8];
-    for (_, i, s) in pairs {
+    for &mut (_, i, s) in pairs {
         if !placed[i] && out[s].is_none() {
             out[s] = Some(children[i]);
             placed[i] = true;
