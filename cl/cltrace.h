@@ -222,16 +222,22 @@ FORCE_INLINE float box_entry(float3 lo, float3 hi, float3 org, float3 inv, float
     return near <= far ? near : -1.0f;
 }
 
-/* Tests a leaf's triangles [first, first + count); true when any_hit may stop the ray. */
-#define TEST_LEAF(first, count)                                          \
-    for (uint i = (first), end_ = (first) + (count); i < end_; ++i) {    \
-        float h_ = intersect_stored(&ray, &tris[i], t);                  \
+/* Tests triangle `index` against the closest hit so far (t, best); with any_hit, the first
+ * hit ends the traversal. */
+#define TEST_TRIANGLE(index)                                             \
+    {                                                                    \
+        uint j_ = (index);                                               \
+        float h_ = intersect_stored(&ray, &tris[j_], t);                 \
         if (h_ >= 0.0f) {                                                \
             t = h_;                                                      \
-            best = i;                                                    \
+            best = j_;                                                   \
             if (any_hit) { *t_hit = t; return best; }                    \
         }                                                                \
     }
+
+/* Tests a leaf's triangles [first, first + count). */
+#define TEST_LEAF(first, count)                                          \
+    for (uint i_ = (first), end_ = (first) + (count); i_ < end_; ++i_) TEST_TRIANGLE(i_)
 
 /* Pops the next stacked node still nearer than the closest hit into `node`, or leaves the
  * traversal loop when none is left. */
@@ -273,15 +279,7 @@ FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool 
         const __global BvhNode* n = &nodes[node];
         bool descend = false;
         if (n->right_or_count & LEAF_FLAG) {
-            uint first = n->left_or_first, end = first + (n->right_or_count & ~LEAF_FLAG);
-            for (uint i = first; i < end; ++i) {
-                float h = intersect_stored(&ray, &tris[i], t);
-                if (h >= 0.0f) {
-                    t = h;
-                    best = i;
-                    if (any_hit) { *t_hit = t; return best; }
-                }
-            }
+            TEST_LEAF(n->left_or_first, n->right_or_count & ~LEAF_FLAG);
         } else {
             uint l = n->left_or_first, r = n->right_or_count;
             float tl = hit_box(&nodes[l], org, inv, t);
@@ -511,14 +509,9 @@ FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool 
             tri_hits = hits & 0x00FFFFFFu;
         }
         while (tri_hits != 0u) {
-            uint i = tri_base + (31u - clz(tri_hits & (0u - tri_hits)));
+            uint lowest = 31u - clz(tri_hits & (0u - tri_hits));
             tri_hits &= tri_hits - 1u;
-            float h = intersect_stored(&ray, &tris[i], t);
-            if (h >= 0.0f) {
-                t = h;
-                best = i;
-                if (any_hit) { *t_hit = t; return best; }
-            }
+            TEST_TRIANGLE(tri_base + lowest);
         }
         if (group.y <= 0x00FFFFFFu) {
             if (sp == 0) break;

@@ -298,19 +298,12 @@ fn open(tree: &[Binary], root: usize) -> Vec<usize> {
         return vec![root];
     }
     let mut children = vec![tree[root].a as usize, tree[root].b as usize];
-    while children.len() < 8 {
-        let Some((k, _)) = children
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| !tree[**c].leaf)
-            .max_by(|a, b| tree[*a.1].area().total_cmp(&tree[*b.1].area()))
-        else {
-            break;
-        };
-        let opened = children.remove(k);
-        children.insert(k, tree[opened].b as usize);
-        children.insert(k, tree[opened].a as usize);
-    }
+    super::wide::open_largest(
+        &mut children,
+        8,
+        |c| (!tree[c].leaf).then_some([tree[c].a as usize, tree[c].b as usize]),
+        |c| tree[c].area(),
+    );
     children
 }
 

@@ -82,6 +82,29 @@ pub struct Collapsed<N> {
     pub sah_cost: f64,
 }
 
+/// Fills a wide node greedily by surface area: while `children` has fewer than `width`
+/// entries, its largest inner node is replaced, in place, by that node's two children
+/// (`split` gives them, `None` for a leaf).
+pub(super) fn open_largest(
+    children: &mut Vec<usize>,
+    width: usize,
+    split: impl Fn(usize) -> Option<[usize; 2]>,
+    area: impl Fn(usize) -> f64,
+) {
+    while children.len() < width {
+        let Some((k, _)) = children
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| split(**c).is_some())
+            .max_by(|a, b| area(*a.1).total_cmp(&area(*b.1)))
+        else {
+            break;
+        };
+        let pair = split(children[k]).expect("an inner node splits");
+        children.splice(k..=k, pair);
+    }
+}
+
 /// Collapses the thesis-layout tree into nodes of up to `N::WIDTH` children.
 pub fn collapse<N: WideNode>(flat: &FlatBvh) -> Collapsed<N> {
     let nodes = &flat.nodes;
@@ -116,19 +139,15 @@ pub fn collapse<N: WideNode>(flat: &FlatBvh) -> Collapsed<N> {
                 nodes[root].right_or_count as usize,
             ]
         };
-        while children.len() < N::WIDTH {
-            let Some((k, _)) = children
-                .iter()
-                .enumerate()
-                .filter(|(_, c)| !nodes[**c].is_leaf())
-                .max_by(|a, b| area(&nodes[*a.1]).total_cmp(&area(&nodes[*b.1])))
-            else {
-                break;
-            };
-            let opened = children.remove(k);
-            children.insert(k, nodes[opened].right_or_count as usize);
-            children.insert(k, nodes[opened].left_or_first as usize);
-        }
+        open_largest(
+            &mut children,
+            N::WIDTH,
+            |c| {
+                let n = &nodes[c];
+                (!n.is_leaf()).then_some([n.left_or_first as usize, n.right_or_count as usize])
+            },
+            |c| area(&nodes[c]),
+        );
         // Inner children are visited last-pushed-first: push in reverse to keep order.
         for (slot, &c) in children.iter().enumerate().rev() {
             let n = &nodes[c];
