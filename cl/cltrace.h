@@ -235,9 +235,27 @@ FORCE_INLINE float box_entry(float3 lo, float3 hi, float3 org, float3 inv, float
         }                                                                \
     }
 
-/* Tests a leaf's triangles [first, first + count). */
+/* Tests a leaf's triangles [first, first + count), count >= 1. The next triangle's rows
+ * load while one is tested, so a leaf costs one memory latency, not one per triangle: on
+ * the H100 incoherent rays trace 8-10% faster (20% at 960x540, where the slowest rays set
+ * the time), coherent ones 2-5% slower (README, "Kernel changes, measured"). */
 #define TEST_LEAF(first, count)                                          \
-    for (uint i_ = (first), end_ = (first) + (count); i_ < end_; ++i_) TEST_TRIANGLE(i_)
+    {                                                                    \
+        uint i_ = (first), end_ = i_ + (count);                          \
+        const __global float4* row_ = (const __global float4*)&tris[i_]; \
+        float4 a_ = row_[0], b_ = row_[1], c_ = row_[2];                 \
+        for (; i_ < end_; ++i_) {                                        \
+            row_ = (const __global float4*)&tris[min(i_ + 1, end_ - 1)]; \
+            float4 next_a_ = row_[0], next_b_ = row_[1], next_c_ = row_[2]; \
+            float h_ = intersect_triangle(&ray, a_.xyz, b_.xyz, c_.xyz, t); \
+            if (h_ >= 0.0f) {                                            \
+                t = h_;                                                  \
+                best = i_;                                               \
+                if (any_hit) { *t_hit = t; return best; }                \
+            }                                                            \
+            a_ = next_a_; b_ = next_b_; c_ = next_c_;                    \
+        }                                                                \
+    }
 
 /* Pops the next stacked node still nearer than the closest hit into `node`, or leaves the
  * traversal loop when none is left. */
