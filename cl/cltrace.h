@@ -235,11 +235,16 @@ FORCE_INLINE float box_entry(float3 lo, float3 hi, float3 org, float3 inv, float
         }                                                                \
     }
 
-/* Tests a leaf's triangles [first, first + count), count >= 1. The next triangle's rows
- * load while one is tested, so a leaf costs one memory latency, not one per triangle: on
- * the H100 incoherent rays trace 8-10% faster (20% at 960x540, where the slowest rays set
- * the time), coherent ones 2-5% slower (README, "Kernel changes, measured"). */
+/* Tests a leaf's triangles [first, first + count). */
 #define TEST_LEAF(first, count)                                          \
+    for (uint i_ = (first), end_ = (first) + (count); i_ < end_; ++i_) TEST_TRIANGLE(i_)
+
+/* TEST_LEAF for count >= 1 with the next triangle's rows loading while one is tested, so
+ * that a leaf costs one memory latency instead of one per triangle. On the H100 it makes
+ * bin64's incoherent rays 8-10% faster at 1920x1080 (20% at 960x540, where the slowest
+ * rays set the time) but coherent ones 3-5% slower, and the other layouts slower still
+ * (README, "Kernel changes, measured"): bin64 uses it for incoherent rays only. */
+#define TEST_LEAF_PIPELINED(first, count)                                \
     {                                                                    \
         uint i_ = (first), end_ = i_ + (count);                          \
         const __global float4* row_ = (const __global float4*)&tris[i_]; \
@@ -282,8 +287,11 @@ FORCE_INLINE float hit_box(const __global BvhNode* node, float3 org, float3 inv,
  * A stack in private memory, nearer child first, boxes beyond the closest hit skipped;
  * mirrors src/bvh/traverse.rs step for step. The stack holds STACK_SIZE entries, the
  * tree's depth, which a traversal never needs more than; should it anyway, bit 0 of
- * *status is set and the ray reported as a miss, never written out of bounds. */
-FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
+ * *status is set and the ray reported as a miss, never written out of bounds.
+ * `incoherent` (a constant at every call) says the rays of neighbouring work-items go
+ * different ways (bounces, ambient occlusion, arbitrary rays) rather than together (camera
+ * rays): a layout may pick its traversal by it; the result is the same either way. */
+FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, bool incoherent, float* t_hit) {
     WatertightRay ray = watertight_ray(org, dir);
     float3 inv = safe_inverse(dir);
     float t = t_max;
@@ -338,7 +346,7 @@ FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool 
  * keeps node indices only: a popped node's children are tested against the closest hit
  * anyway, and halving the stack traffic measured 3-5% faster on the H100 than culling
  * popped nodes by a stored entry distance. */
-FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
+FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, bool incoherent, float* t_hit) {
     WatertightRay ray = watertight_ray(org, dir);
     float3 inv = safe_inverse(dir);
     float t = t_max;
@@ -353,8 +361,13 @@ FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool 
         float tl = box_entry((float3)(lxy.x, lxy.z, z.x), (float3)(lxy.y, lxy.w, z.y), org, inv, t);
         float tr = box_entry((float3)(rxy.x, rxy.z, z.z), (float3)(rxy.y, rxy.w, z.w), org, inv, t);
         bool hl = tl >= 0.0f, hr = tr >= 0.0f;
-        if (hl && refs.z != 0) { TEST_LEAF(refs.x, refs.z); hl = false; }
-        if (hr && refs.w != 0) { TEST_LEAF(refs.y, refs.w); hr = false; }
+        if (incoherent) {
+            if (hl && refs.z != 0) { TEST_LEAF_PIPELINED(refs.x, refs.z); hl = false; }
+            if (hr && refs.w != 0) { TEST_LEAF_PIPELINED(refs.y, refs.w); hr = false; }
+        } else {
+            if (hl && refs.z != 0) { TEST_LEAF(refs.x, refs.z); hl = false; }
+            if (hr && refs.w != 0) { TEST_LEAF(refs.y, refs.w); hr = false; }
+        }
         if (hl && hr) {
             if (sp >= STACK_SIZE) { atomic_or(status, STATUS_STACK_OVERFLOW); return MISS; }
             bool right_first = tr < tl;
@@ -389,7 +402,7 @@ FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool 
 /* Wide traversal: each node's children boxes are tested plane by plane with one vector
  * operation per plane; leaf children are tested at once, the nearest inner one visited
  * next. Same contract as the LAYOUT 32 trace. */
-FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
+FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, bool incoherent, float* t_hit) {
     WatertightRay ray = watertight_ray(org, dir);
     float3 inv = safe_inverse(dir);
     float3 inv_near = near_inverse(inv);
@@ -463,7 +476,7 @@ FORCE_INLINE float byte_of(uint lo, uint hi, uint k) {
  * side), and a ray meets first the corner of its negative direction components. Inner
  * children hit go to bit 24 + (s ^ order) and are visited from the highest bit down:
  * roughly front to back. */
-FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
+FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, bool incoherent, float* t_hit) {
     WatertightRay ray = watertight_ray(org, dir);
     float3 inv = safe_inverse(dir);
     uint order = 7u ^ ((signbit(dir.x) ? 4u : 0u) | (signbit(dir.y) ? 2u : 0u) | (signbit(dir.z) ? 1u : 0u));
@@ -547,7 +560,7 @@ FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool 
 
 /* Brute force: every triangle, the first in order winning a tie (or, with any_hit, the
  * first hit at all). Same contract as the BVH's trace above. */
-FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, float* t_hit) {
+FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, bool incoherent, float* t_hit) {
     WatertightRay ray = watertight_ray(org, dir);
     float t = t_max;
     uint best = MISS;

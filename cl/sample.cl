@@ -28,7 +28,7 @@ FORCE_INLINE void add_sample(__global float4* accum, __global uint* rays, uint a
 
 FORCE_INLINE bool occluded(SCENE_PARAMS, float3 org, float3 dir, float t_max) {
     float t;
-    return trace(SCENE, org, dir, t_max, true, &t) != MISS;
+    return trace(SCENE, org, dir, t_max, true, true, &t) != MISS;
 }
 
 __kernel void sample_ao(SAMPLE_PARAMS) {
@@ -37,7 +37,7 @@ __kernel void sample_ao(SAMPLE_PARAMS) {
     uint key = sampler_key(seed, y * width + x, sample);
     float3 dir = jittered_ray(p0, du, dv, x, y, key);
     float t;
-    uint hit = trace(SCENE, eye.xyz, dir, INFINITY, false, &t);
+    uint hit = trace(SCENE, eye.xyz, dir, INFINITY, false, false, &t);
     float3 radiance = (float3)(0.0f);
     uint count = 1;
     if (hit != MISS) {
@@ -60,7 +60,7 @@ __kernel void sample_shadow(SAMPLE_PARAMS) {
     uint key = sampler_key(seed, y * width + x, sample);
     float3 dir = jittered_ray(p0, du, dv, x, y, key);
     float t;
-    uint hit = trace(SCENE, eye.xyz, dir, INFINITY, false, &t);
+    uint hit = trace(SCENE, eye.xyz, dir, INFINITY, false, false, &t);
     float3 radiance = (float3)(0.0f);
     uint count = 1;
     if (hit != MISS) {
@@ -100,7 +100,7 @@ __kernel void sample_path(SAMPLE_PARAMS) {
     float3 radiance = (float3)(0.0f), throughput = (float3)(1.0f);
     uint count = 1;
     float t;
-    uint hit = trace(SCENE, org, dir, INFINITY, false, &t);
+    uint hit = trace(SCENE, org, dir, INFINITY, false, false, &t);
     for (uint bounce = 0;; ++bounce) {
         if (hit == MISS) {
             if (emitter_count == 0) radiance += throughput * sky(dir);
@@ -140,7 +140,7 @@ __kernel void sample_path(SAMPLE_PARAMS) {
         org = origin;
         dir = cosine_direction(n, sample_1d(key, d + 4), sample_1d(key, d + 5));
         count += 1;
-        hit = trace(SCENE, org, dir, INFINITY, false, &t);
+        hit = trace(SCENE, org, dir, INFINITY, false, true, &t);
     }
     add_sample(accum, rays, accum_pitch, x, y - row0, radiance, count);
 }

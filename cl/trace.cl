@@ -15,7 +15,7 @@ __kernel void trace_primary(SCENE_PARAMS,
     if (x >= width || y < row0 || y >= row_end) return;
     float3 dir = camera_ray(p0, du, dv, x, y);
     float t;
-    uint best = trace(SCENE, eye.xyz, dir, INFINITY, false, &t);
+    uint best = trace(SCENE, eye.xyz, dir, INFINITY, false, false, &t);
     store_pixel(hits, hit_pitch, colors, color_pitch, x, y - row0, best, t, dir, tris, shade, near, far);
 }
 
@@ -28,7 +28,7 @@ __kernel void trace_rays(SCENE_PARAMS, __global const float4* rays, uint count, 
     float4 o = rays[2 * i];
     float3 dir = rays[2 * i + 1].xyz;
     float t;
-    uint best = trace(SCENE, o.xyz, dir, o.w, any_hit != 0, &t);
+    uint best = trace(SCENE, o.xyz, dir, o.w, any_hit != 0, true, &t);
     Hit h;
     h.prim = best == MISS ? MISS : tris[best].prim;
     h.t = best == MISS ? INFINITY : t * length3(dir);
