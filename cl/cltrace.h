@@ -222,17 +222,21 @@ FORCE_INLINE float box_entry(float3 lo, float3 hi, float3 org, float3 inv, float
     return near <= far ? near : -1.0f;
 }
 
-/* Tests triangle `index` against the closest hit so far (t, best); with any_hit, the first
- * hit ends the traversal. */
+/* Keeps a triangle test's result h (negative: no hit) for triangle `index` as the closest
+ * hit so far (t, best); with any_hit, the first hit ends the traversal. */
+#define KEEP_HIT(h, index)                                               \
+    if ((h) >= 0.0f) {                                                   \
+        t = (h);                                                         \
+        best = (index);                                                  \
+        if (any_hit) { *t_hit = t; return best; }                        \
+    }
+
+/* Tests triangle `index` against the closest hit so far. */
 #define TEST_TRIANGLE(index)                                             \
     {                                                                    \
         uint j_ = (index);                                               \
         float h_ = intersect_stored(&ray, &tris[j_], t);                 \
-        if (h_ >= 0.0f) {                                                \
-            t = h_;                                                      \
-            best = j_;                                                   \
-            if (any_hit) { *t_hit = t; return best; }                    \
-        }                                                                \
+        KEEP_HIT(h_, j_)                                                 \
     }
 
 /* Tests a leaf's triangles [first, first + count). */
@@ -241,8 +245,8 @@ FORCE_INLINE float box_entry(float3 lo, float3 hi, float3 org, float3 inv, float
 
 /* TEST_LEAF for count >= 1 with the next triangle's rows loading while one is tested, so
  * that a leaf costs one memory latency instead of one per triangle. On the H100 it makes
- * bin64's incoherent rays 8-10% faster at 1920x1080 (20% at 960x540, where the slowest
- * rays set the time) but coherent ones 3-5% slower, and the other layouts slower still
+ * bin64's incoherent rays 7-10% faster at 1920x1080 (20% at 960x540, where the slowest
+ * rays set the time) but coherent ones 2-5% slower, and the other layouts slower still
  * (README, "Kernel changes, measured"): bin64 uses it for incoherent rays only. */
 #define TEST_LEAF_PIPELINED(first, count)                                \
     {                                                                    \
@@ -253,11 +257,7 @@ FORCE_INLINE float box_entry(float3 lo, float3 hi, float3 org, float3 inv, float
             row_ = (const __global float4*)&tris[min(i_ + 1, end_ - 1)]; \
             float4 next_a_ = row_[0], next_b_ = row_[1], next_c_ = row_[2]; \
             float h_ = intersect_triangle(&ray, a_.xyz, b_.xyz, c_.xyz, t); \
-            if (h_ >= 0.0f) {                                            \
-                t = h_;                                                  \
-                best = i_;                                               \
-                if (any_hit) { *t_hit = t; return best; }                \
-            }                                                            \
+            KEEP_HIT(h_, i_)                                             \
             a_ = next_a_; b_ = next_b_; c_ = next_c_;                    \
         }                                                                \
     }
