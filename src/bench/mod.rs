@@ -50,9 +50,28 @@ impl RayKind {
     }
 }
 
+/// Side of the pixel tiles that order the diffuse rays.
+pub const DIFFUSE_TILE: u32 = 16;
+
+/// The pixels of a `width` x `height` image tile by tile (`tile` x `tile` squares, row by
+/// row within a tile, tiles row by row; the last ones cut at the edges).
+pub fn tile_order(width: u32, height: u32, tile: u32) -> impl Iterator<Item = u32> {
+    (0..height.div_ceil(tile)).flat_map(move |ty| {
+        (0..width.div_ceil(tile)).flat_map(move |tx| {
+            let rows = ty * tile..((ty + 1) * tile).min(height);
+            rows.flat_map(move |y| {
+                (tx * tile..((tx + 1) * tile).min(width)).map(move |x| y * width + x)
+            })
+        })
+    })
+}
+
 /// The diffuse rays of the benchmark protocol for `camera`, found with a host BVH (every
 /// method then traces the same rays). Directions come from the counter-based generator with
-/// seed 0, keyed by pixel, so the rays are the same on every machine.
+/// seed 0, keyed by pixel, so the rays are the same on every machine. They come in the order
+/// of [`tile_order`], as the render kernels' 2D work-groups trace their bounces: rays from
+/// neighbouring pixels start close together and share the nodes around their origins (on
+/// the H100, 16 x 16 tiles traced 4-8% faster than scanline order; README, Performance).
 pub fn diffuse_rays(mesh: &Mesh, camera: &Camera) -> Vec<Ray> {
     use crate::render::cpu::ClosestHit;
     use crate::render::integrator::facing_normal;
@@ -62,7 +81,8 @@ pub fn diffuse_rays(mesh: &Mesh, camera: &Camera) -> Vec<Ray> {
     let offset = 1e-4 * mesh.bounds().extent().length() * 0.5;
     let pinhole = camera.pinhole();
     let width = camera.width;
-    (0..camera.width * camera.height)
+    let pixels: Vec<u32> = tile_order(camera.width, camera.height, DIFFUSE_TILE).collect();
+    pixels
         .into_par_iter()
         .with_min_len(4096)
         .filter_map(|pixel| {
@@ -607,7 +627,24 @@ fn targets(req: &BenchRequest) -> Result<Vec<Target>> {
 
 #[cfg(test)]
 mod tests {
-    use super::{Estimate, Growth};
+    use super::{Estimate, Growth, tile_order};
+
+    /// Every pixel once, in whole tiles where they fit, cut ones at the right and bottom.
+    #[test]
+    fn tile_order_visits_every_pixel_once_tile_by_tile() {
+        for (w, h, tile) in [(7, 5, 2), (16, 16, 4), (5, 3, 16), (1, 1, 16), (33, 17, 8)] {
+            let order: Vec<u32> = tile_order(w, h, tile).collect();
+            let mut sorted = order.clone();
+            sorted.sort_unstable();
+            assert_eq!(
+                sorted,
+                (0..w * h).collect::<Vec<_>>(),
+                "{w}x{h} tile {tile}"
+            );
+        }
+        let order: Vec<u32> = tile_order(5, 3, 2).collect();
+        assert_eq!(order, [0, 1, 5, 6, 2, 3, 7, 8, 4, 9, 10, 11, 12, 13, 14]);
+    }
 
     /// A GPU-like device: time nearly flat while the thumbnails are smaller than the device
     /// holds, then linear. The estimate waits for the linear part.
