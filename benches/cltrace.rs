@@ -7,14 +7,14 @@ use std::io::Write;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 
+use cltrace::bvh::Bin32Bvh;
 use cltrace::bvh::{BuildOptions, Bvh};
 use cltrace::camera::Camera;
+use cltrace::device::tracer::ClTracer;
 use cltrace::device::{ClDevice, DeviceSelector};
 use cltrace::input::generate::Generator;
 use cltrace::input::load_mesh;
-use cltrace::layout::FlatBvh;
 use cltrace::mesh::Mesh;
-use cltrace::render::opencl::ClTracer;
 use cltrace::render::{Shade, ShadeParams, cpu};
 
 fn hillside(triangles: u64) -> Mesh {
@@ -40,9 +40,9 @@ fn build(c: &mut Criterion) {
     group.finish();
 }
 
-fn scene() -> (Mesh, FlatBvh, Camera) {
+fn scene() -> (Mesh, Bin32Bvh, Camera) {
     let mesh = hillside(70_000);
-    let bvh = FlatBvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
+    let bvh = Bin32Bvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
     let camera = Camera::auto(&mesh.bounds(), 512, 512).unwrap();
     (mesh, bvh, camera)
 }

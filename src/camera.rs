@@ -3,10 +3,10 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
+use serde::Deserialize;
 
 use crate::error::{Error, Result};
 use crate::geometry::{Aabb, Ray};
-use crate::input::scene_file::CameraSettings;
 
 /// Largest width or height accepted.
 pub const MAX_RESOLUTION: u32 = 16384;
@@ -15,6 +15,33 @@ pub const AUTO_FOV: f32 = 45.0;
 /// Resolution when neither the scene nor the flags give one.
 pub const DEFAULT_WIDTH: u32 = 1280;
 pub const DEFAULT_HEIGHT: u32 = 720;
+
+/// Camera settings; `None` means "not said here" (a later layer or the auto framing decides).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSettings {
+    pub eye: Option<[f32; 3]>,
+    pub look_at: Option<[f32; 3]>,
+    pub up: Option<[f32; 3]>,
+    /// Vertical field of view in degrees.
+    pub fov: Option<f32>,
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+}
+
+impl CameraSettings {
+    /// Each setting from `self` where given, else from `base`.
+    pub fn over(self, base: CameraSettings) -> CameraSettings {
+        CameraSettings {
+            eye: self.eye.or(base.eye),
+            look_at: self.look_at.or(base.look_at),
+            up: self.up.or(base.up),
+            fov: self.fov.or(base.fov),
+            width: self.width.or(base.width),
+            height: self.height.or(base.height),
+        }
+    }
+}
 
 /// A pinhole camera: eye, the point it looks at, an up hint and a vertical field of view.
 #[derive(Clone, Copy, Debug, PartialEq)]

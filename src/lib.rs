@@ -17,6 +17,7 @@
 //! - [`commands`]: the subcommands the `cltrace` binary runs.
 
 pub mod bench;
+pub mod brute;
 pub mod bvh;
 pub mod camera;
 pub mod commands;
@@ -24,13 +25,13 @@ pub mod device;
 pub mod error;
 pub mod geometry;
 pub mod input;
-pub mod layout;
+pub mod intersect;
 pub mod material;
 pub mod mesh;
 pub mod output;
 pub mod render;
+pub mod renderer;
 pub mod report;
-pub mod triangle;
 pub mod tune;
 
 pub use error::{Error, Result};

@@ -6,10 +6,11 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand};
 
 use cltrace::bench::{self as benchmark, BenchRequest, RayKind};
+use cltrace::bvh::Layout;
 use cltrace::bvh::{BuildOptions, Builder};
+use cltrace::camera::CameraSettings;
 use cltrace::commands::{bvh, devices, render};
-use cltrace::input::scene_file::{CameraSettings, RenderSettings};
-use cltrace::layout::Layout;
+use cltrace::input::scene_file::RenderSettings;
 use cltrace::render::{Method, Shade};
 use cltrace::report::Verbosity;
 
@@ -415,6 +416,7 @@ fn run_render(args: RenderArgs) -> cltrace::Result<()> {
         device: args.device,
         build: args.build.options(),
         fallback: args.fallback,
+        tune_cache: cltrace::tune::cache_path(),
         verbosity,
     };
     let outcome = render::run(&request)?;
@@ -491,7 +493,7 @@ fn run_tune(args: TuneArgs) -> cltrace::Result<()> {
     let path = args.cache.or_else(cache_path).ok_or_else(|| {
         cltrace::Error::Invalid("no cache location: set CLTRACE_TUNE_CACHE or HOME".into())
     })?;
-    let scene = render::describe_scene(args.scene.as_deref())?;
+    let scene = cltrace::input::scene_file::SceneDescription::named(args.scene.as_deref())?;
     let mesh = scene.mesh.load()?;
     let all = list_devices()?;
     let chosen: Vec<_> = if args.devices.trim().eq_ignore_ascii_case("all") {

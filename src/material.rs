@@ -3,6 +3,8 @@
 
 use bytemuck::{Pod, Zeroable};
 
+use crate::intersect::Triangle;
+
 /// The albedo of triangles without a material: a mid grey.
 pub const DEFAULT_ALBEDO: [f32; 3] = [0.7, 0.7, 0.7];
 
@@ -46,9 +48,6 @@ impl Default for Material {
     }
 }
 
-// SAFETY: plain-old-data with a fixed C layout, mirrored in cl/cltrace.h.
-unsafe impl ocl::OclPrm for Material {}
-
 /// The materials of a mesh: a list, and each triangle's index into it (file order).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Materials {
@@ -64,6 +63,13 @@ impl Default for Materials {
 }
 
 impl Materials {
+    /// Stores each triangle's material index (looked up by its file-order index).
+    pub fn assign(&self, triangles: &mut [Triangle]) {
+        for t in triangles {
+            t.material = self.index_of(t.prim as usize);
+        }
+    }
+
     /// One material for every triangle.
     pub fn uniform(material: Material) -> Self {
         Materials {

@@ -7,14 +7,15 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::bench::{RayKind, diffuse_rays};
+use crate::bvh::Layout;
 use crate::camera::Camera;
-use crate::device::{ClDevice, DeviceInfo, DeviceKind};
+use crate::device::{ClDevice, DeviceInfo};
 use crate::error::{Error, Result};
-use crate::layout::Layout;
 use crate::material::Materials;
 use crate::mesh::Mesh;
 use crate::output::write_atomically;
-use crate::render::{Method, PrepareOptions, Renderer, Shade, ShadeParams};
+use crate::render::{Method, Shade, ShadeParams};
+use crate::renderer::{PrepareOptions, Renderer};
 use crate::report::Timings;
 
 /// Work-group shapes tried (pixels across, down); those over a device's limit are skipped.
@@ -40,16 +41,6 @@ pub struct Tuning {
     pub diffuse_mrays: f64,
     /// The scene it was measured on.
     pub scene: String,
-}
-
-/// The layout for a device nobody has tuned: wide nodes for CPUs (their boxes go through
-/// SIMD lanes), Aila–Laine binary nodes elsewhere (the fastest for primary and diffuse rays
-/// on the H100: README, Performance).
-pub fn default_layout(device: &DeviceInfo) -> Layout {
-    match device.kind {
-        DeviceKind::Cpu => Layout::Wide8,
-        _ => Layout::Bin64,
-    }
 }
 
 /// The tuning cache: `CLTRACE_TUNE_CACHE`, else `$XDG_CACHE_HOME/cltrace/tune.toml`, else
@@ -100,11 +91,6 @@ impl TuneCache {
     pub fn get(&self, device: &DeviceInfo) -> Option<&Tuning> {
         self.devices.get(&device.key())
     }
-}
-
-/// The tuning recorded for `device`, if any.
-pub fn cached(device: &DeviceInfo) -> Option<Tuning> {
-    cache_path().and_then(|p| TuneCache::load(&p).get(device).cloned())
 }
 
 /// One measured combination.

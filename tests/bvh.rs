@@ -4,12 +4,12 @@
 
 mod common;
 
+use cltrace::bvh::Bin32Bvh;
 use cltrace::bvh::{BuildOptions, Builder, Bvh, MAX_DEPTH};
 use cltrace::geometry::Ray;
 use cltrace::input::generate::Generator;
-use cltrace::layout::FlatBvh;
+use cltrace::intersect::ClosestHit;
 use cltrace::mesh::Mesh;
-use cltrace::render::cpu::ClosestHit;
 use common::*;
 use glam::Vec3;
 use proptest::prelude::*;
@@ -23,7 +23,7 @@ proptest! {
         for opts in all_options() {
             let bvh = Bvh::build(&mesh, &opts);
             prop_assert!(bvh.check(&mesh).is_ok(), "{opts:?}: {}", bvh.check(&mesh).unwrap_err());
-            let flat = FlatBvh::new(bvh, &mesh);
+            let flat = Bin32Bvh::new(bvh, &mesh);
             if let Err(e) = same_hits(&mesh, &flat, &rays) {
                 prop_assert!(false, "{opts:?}: {e}");
             }
@@ -53,7 +53,7 @@ fn binned_sah_cost_is_within_5_percent_of_the_sweep() {
 #[test]
 fn bvh_hits_equal_brute_force_on_the_test_scenes() {
     for (name, mesh) in test_scenes() {
-        let flat = FlatBvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
+        let flat = Bin32Bvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
         let count = if mesh.triangle_count() > 20_000 {
             200
         } else {
@@ -71,7 +71,7 @@ fn survives(name: &str, mesh: &Mesh) -> Bvh {
         let bvh = Bvh::build(mesh, &opts);
         bvh.check(mesh)
             .unwrap_or_else(|e| panic!("{name}, {opts:?}: {e}"));
-        same_hits(mesh, &FlatBvh::new(bvh, mesh), &rays)
+        same_hits(mesh, &Bin32Bvh::new(bvh, mesh), &rays)
             .unwrap_or_else(|e| panic!("{name}, {opts:?}: {e}"));
     }
     Bvh::build(mesh, &BuildOptions::default())
@@ -125,7 +125,7 @@ fn a_million_triangles_in_one_point() {
     let bvh = Bvh::build(&mesh, &BuildOptions::default());
     bvh.check(&mesh).unwrap();
     assert!(bvh.depth <= MAX_DEPTH);
-    let flat = FlatBvh::new(bvh, &mesh);
+    let flat = Bin32Bvh::new(bvh, &mesh);
     let ray = Ray::new(Vec3::new(1.0, 1.0, 5.0), Vec3::NEG_Z);
     assert_eq!(
         flat.closest_hit(&ray, f32::INFINITY),
@@ -167,7 +167,7 @@ fn depth_stays_bounded_where_the_sah_would_chain() {
             let bvh = Bvh::build(&mesh, &limited);
             assert!(bvh.depth <= max_depth, "{limited:?}: depth {}", bvh.depth);
             bvh.check(&mesh).unwrap();
-            same_hits(&mesh, &FlatBvh::new(bvh, &mesh), &rays).unwrap();
+            same_hits(&mesh, &Bin32Bvh::new(bvh, &mesh), &rays).unwrap();
         }
     }
 }

@@ -7,12 +7,12 @@ mod common;
 
 use std::collections::BTreeMap;
 
+use cltrace::bvh::Bin32Bvh;
 use cltrace::bvh::optimize::MAX_ROUNDS;
 use cltrace::bvh::{BuildOptions, Builder, Bvh, MAX_DEPTH};
 use cltrace::geometry::Ray;
 use cltrace::input::generate::Generator;
 use cltrace::input::load_mesh;
-use cltrace::layout::FlatBvh;
 use cltrace::mesh::Mesh;
 use common::*;
 use glam::Vec3;
@@ -84,7 +84,7 @@ fn check_optimized(
     if after > before {
         return Err(ctx(format!("SAH cost rose from {before} to {after}")));
     }
-    same_hits(mesh, &FlatBvh::new(optimized, mesh), rays).map_err(ctx)?;
+    same_hits(mesh, &Bin32Bvh::new(optimized, mesh), rays).map_err(ctx)?;
     Ok((before, after))
 }
 

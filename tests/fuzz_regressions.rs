@@ -142,12 +142,14 @@ fn lines_split_at_unicode_whitespace_as_tobj_splits_them() {
 /// or outside the triangle's own box).
 #[test]
 fn bvh_regressions_trace_alike_on_the_opencl_device() {
+    use cltrace::brute::BruteForce;
+    use cltrace::bvh::{Bin32Bvh, DeviceLayout, Layout};
     use cltrace::bvh::{BuildOptions, Bvh};
+    use cltrace::device::tracer::ClTracer;
     use cltrace::device::{ClDevice, DeviceSelector};
-    use cltrace::layout::{DeviceLayout, FlatBvh, Layout, triangles_in_order};
-    use cltrace::render::cpu::{BruteForce, ClosestHit};
-    use cltrace::render::opencl::ClTracer;
-    use cltrace::triangle::WatertightRay;
+    use cltrace::intersect::ClosestHit;
+    use cltrace::intersect::WatertightRay;
+    use cltrace::intersect::triangles_in_order;
     use fuzz_cases::{TIE, box_entry, decode_soup};
 
     let selector = DeviceSelector::from_flag_or_env(None).expect("valid CLTRACE_DEVICE");
@@ -165,7 +167,7 @@ fn bvh_regressions_trace_alike_on_the_opencl_device() {
         };
         let bvh = Bvh::build(mesh, &BuildOptions::default());
         let sah = bvh.stats().sah_cost;
-        let flat = FlatBvh::new(bvh, mesh);
+        let flat = Bin32Bvh::new(bvh, mesh);
         for layout in Layout::ALL {
             let laid = DeviceLayout::new(flat.clone(), layout, sah);
             let program =

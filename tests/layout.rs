@@ -5,11 +5,12 @@ mod common;
 
 use std::mem::{offset_of, size_of};
 
+use cltrace::bvh::Bin32Node;
+use cltrace::bvh::bin64::Bin64Node;
+use cltrace::bvh::cwbvh::CwbvhNode;
+use cltrace::bvh::{wide4::Wide4Node, wide8::Wide8Node};
 use cltrace::device::KernelSource;
-use cltrace::layout::aila::Bvh64Node;
-use cltrace::layout::compressed::CompressedNode;
-use cltrace::layout::wide::{Wide4Node, Wide8Node};
-use cltrace::layout::{BvhNode, Triangle};
+use cltrace::intersect::Triangle;
 use cltrace::material::Material;
 use cltrace::render::Hit;
 
@@ -22,13 +23,16 @@ fn device_structs_match_the_rust_structs() {
         ("Triangle.v1", offset_of!(Triangle, v1)),
         ("Triangle.material", offset_of!(Triangle, material)),
         ("Triangle.v2", offset_of!(Triangle, v2)),
-        ("sizeof(BvhNode)", size_of::<BvhNode>()),
-        ("BvhNode.min", offset_of!(BvhNode, min)),
-        ("BvhNode.left_or_first", offset_of!(BvhNode, left_or_first)),
-        ("BvhNode.max", offset_of!(BvhNode, max)),
+        ("sizeof(Bin32Node)", size_of::<Bin32Node>()),
+        ("Bin32Node.min", offset_of!(Bin32Node, min)),
         (
-            "BvhNode.right_or_count",
-            offset_of!(BvhNode, right_or_count),
+            "Bin32Node.left_or_first",
+            offset_of!(Bin32Node, left_or_first),
+        ),
+        ("Bin32Node.max", offset_of!(Bin32Node, max)),
+        (
+            "Bin32Node.right_or_count",
+            offset_of!(Bin32Node, right_or_count),
         ),
         ("sizeof(Hit)", size_of::<Hit>()),
         ("Hit.prim", offset_of!(Hit, prim)),
@@ -36,10 +40,10 @@ fn device_structs_match_the_rust_structs() {
         ("sizeof(Material)", size_of::<Material>()),
         ("Material.albedo", offset_of!(Material, albedo)),
         ("Material.emission", offset_of!(Material, emission)),
-        ("sizeof(Bvh64Node)", size_of::<Bvh64Node>()),
-        ("Bvh64Node.right_xy", offset_of!(Bvh64Node, right_xy)),
-        ("Bvh64Node.z", offset_of!(Bvh64Node, z)),
-        ("Bvh64Node.refs", offset_of!(Bvh64Node, refs)),
+        ("sizeof(Bin64Node)", size_of::<Bin64Node>()),
+        ("Bin64Node.right_xy", offset_of!(Bin64Node, right_xy)),
+        ("Bin64Node.z", offset_of!(Bin64Node, z)),
+        ("Bin64Node.refs", offset_of!(Bin64Node, refs)),
         ("sizeof(Wide4Node)", size_of::<Wide4Node>()),
         ("Wide4Node.max_z", offset_of!(Wide4Node, max_z)),
         ("Wide4Node.child", offset_of!(Wide4Node, child)),
@@ -48,37 +52,28 @@ fn device_structs_match_the_rust_structs() {
         ("Wide8Node.max_z", offset_of!(Wide8Node, max_z)),
         ("Wide8Node.child", offset_of!(Wide8Node, child)),
         ("Wide8Node.count", offset_of!(Wide8Node, count)),
-        ("sizeof(CompressedNode)", size_of::<CompressedNode>()),
+        ("sizeof(CwbvhNode)", size_of::<CwbvhNode>()),
+        ("CwbvhNode.exponent", offset_of!(CwbvhNode, exponent)),
+        ("CwbvhNode.inner_mask", offset_of!(CwbvhNode, inner_mask)),
+        ("CwbvhNode.child_base", offset_of!(CwbvhNode, child_base)),
         (
-            "CompressedNode.exponent",
-            offset_of!(CompressedNode, exponent),
+            "CwbvhNode.triangle_base",
+            offset_of!(CwbvhNode, triangle_base),
         ),
-        (
-            "CompressedNode.inner_mask",
-            offset_of!(CompressedNode, inner_mask),
-        ),
-        (
-            "CompressedNode.child_base",
-            offset_of!(CompressedNode, child_base),
-        ),
-        (
-            "CompressedNode.triangle_base",
-            offset_of!(CompressedNode, triangle_base),
-        ),
-        ("CompressedNode.meta", offset_of!(CompressedNode, meta)),
-        ("CompressedNode.lo_x", offset_of!(CompressedNode, lo_x)),
-        ("CompressedNode.hi_x", offset_of!(CompressedNode, hi_x)),
-        ("CompressedNode.hi_z", offset_of!(CompressedNode, hi_z)),
+        ("CwbvhNode.meta", offset_of!(CwbvhNode, meta)),
+        ("CwbvhNode.lo_x", offset_of!(CwbvhNode, lo_x)),
+        ("CwbvhNode.hi_x", offset_of!(CwbvhNode, hi_x)),
+        ("CwbvhNode.hi_z", offset_of!(CwbvhNode, hi_z)),
     ];
     // The thesis's node is 32 bytes; a triangle is three 16-byte corners.
-    assert_eq!(size_of::<BvhNode>(), 32);
+    assert_eq!(size_of::<Bin32Node>(), 32);
     assert_eq!(size_of::<Triangle>(), 48);
     assert_eq!(size_of::<Hit>(), 8);
-    assert_eq!(size_of::<Bvh64Node>(), 64);
+    assert_eq!(size_of::<Bin64Node>(), 64);
     assert_eq!((size_of::<Wide4Node>(), size_of::<Wide8Node>()), (128, 256));
     // Five 16-byte rows, read as vectors by the kernel.
-    assert_eq!(size_of::<CompressedNode>(), 80);
-    assert_eq!(offset_of!(CompressedNode, lo_x), 32);
+    assert_eq!(size_of::<CwbvhNode>(), 80);
+    assert_eq!(offset_of!(CwbvhNode, lo_x), 32);
 
     let device = common::device();
     let program = device.build(KernelSource::Probe, &[]).unwrap();

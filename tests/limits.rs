@@ -6,19 +6,19 @@ mod common;
 
 use std::sync::atomic::AtomicBool;
 
+use cltrace::bvh::Bin32Bvh;
 use cltrace::bvh::{BuildOptions, Bvh};
 use cltrace::camera::Camera;
+use cltrace::device::tracer::ClTracer;
 use cltrace::input::generate::Generator;
-use cltrace::layout::FlatBvh;
 use cltrace::render::integrator::{Accumulation, Lighting, SampleSettings};
-use cltrace::render::opencl::ClTracer;
 use cltrace::render::{Shade, ShadeParams};
 use common::*;
 
 #[test]
 fn images_larger_than_one_allocation_are_rendered_in_bands() {
     let mesh = generate(Generator::Sphere { subdivisions: 3 });
-    let bvh = FlatBvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
+    let bvh = Bin32Bvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
     let camera = Camera::auto(&mesh.bounds(), 96, 80).unwrap();
     let shade = ShadeParams::new(Shade::Lambert, &camera, &mesh.bounds());
     let settings = SampleSettings {
@@ -33,7 +33,7 @@ fn images_larger_than_one_allocation_are_rendered_in_bands() {
     let render = |budget: Option<u64>| {
         let program = ClTracer::compile(
             &device,
-            Some((cltrace::layout::Layout::Bin32, bvh.depth)),
+            Some((cltrace::bvh::Layout::Bin32, bvh.depth)),
             true,
         )
         .unwrap();
@@ -72,7 +72,7 @@ fn images_larger_than_one_allocation_are_rendered_in_bands() {
 #[test]
 fn a_scene_larger_than_the_device_is_refused_before_upload() {
     let mesh = generate(Generator::Sphere { subdivisions: 4 });
-    let bvh = FlatBvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
+    let bvh = Bin32Bvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
     let mut device = device();
     device.info.max_allocation = 64 * 1024;
     device.info.global_memory = 1 << 30;

@@ -4,15 +4,16 @@
 
 mod common;
 
+use cltrace::bvh::Bin32Bvh;
 use cltrace::bvh::{BuildOptions, Builder, Bvh};
 use cltrace::camera::Camera;
+use cltrace::camera::CameraSettings;
 use cltrace::device::ClDevice;
+use cltrace::device::tracer::ClTracer;
 use cltrace::input::generate::Generator;
 use cltrace::input::load_mesh;
-use cltrace::input::scene_file::CameraSettings;
-use cltrace::layout::{FlatBvh, triangles_in_order};
+use cltrace::intersect::triangles_in_order;
 use cltrace::mesh::Mesh;
-use cltrace::render::opencl::ClTracer;
 use cltrace::render::{Frame, Shade, ShadeParams, cpu};
 use common::*;
 
@@ -109,7 +110,7 @@ fn cases() -> Vec<Case> {
 }
 
 fn reference(c: &Case) -> Frame {
-    let tracer = cpu::BruteForce {
+    let tracer = cltrace::brute::BruteForce {
         triangles: triangles_in_order(&c.mesh, 0..c.mesh.triangle_count() as u32),
     };
     let shade = ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds());
@@ -141,7 +142,7 @@ fn cl_brute(device: &ClDevice, c: &Case) -> Frame {
 }
 
 fn cl_bvh(device: &ClDevice, c: &Case, options: &BuildOptions) -> Frame {
-    let bvh = FlatBvh::new(Bvh::build(&c.mesh, options), &c.mesh);
+    let bvh = Bin32Bvh::new(Bvh::build(&c.mesh, options), &c.mesh);
     let program = ClTracer::compile_bvh(device, bvh.depth).unwrap();
     let mut tracer = ClTracer::bvh(device, &program, &bvh).unwrap();
     let shade = ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds());
@@ -216,13 +217,13 @@ fn opencl_bvh_matches_the_cpu_reference() {
 
 #[test]
 fn every_layout_matches_the_cpu_reference() {
-    use cltrace::layout::{DeviceLayout, Layout};
+    use cltrace::bvh::{DeviceLayout, Layout};
     let device = device();
     for c in cases() {
         let reference = reference(&c);
         let bvh = Bvh::build(&c.mesh, &BuildOptions::default());
         let sah = bvh.stats().sah_cost;
-        let flat = FlatBvh::new(bvh, &c.mesh);
+        let flat = Bin32Bvh::new(bvh, &c.mesh);
         for layout in Layout::ALL {
             let laid = DeviceLayout::new(flat.clone(), layout, sah);
             let program =
@@ -252,7 +253,7 @@ fn every_layout_matches_the_cpu_reference() {
 fn cpu_bvh_matches_the_cpu_reference() {
     for c in cases() {
         let reference = reference(&c);
-        let bvh = FlatBvh::new(Bvh::build(&c.mesh, &BuildOptions::default()), &c.mesh);
+        let bvh = Bin32Bvh::new(Bvh::build(&c.mesh, &BuildOptions::default()), &c.mesh);
         let shade = ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds());
         let frame = cpu::render(
             &bvh,
@@ -276,7 +277,7 @@ fn pixels_and_colours_agree_between_kernels_and_host() {
         let params = ShadeParams::new(shade, &c.camera, &c.mesh.bounds());
         let tris = triangles_in_order(&c.mesh, 0..c.mesh.triangle_count() as u32);
         let host = cpu::render(
-            &cpu::BruteForce {
+            &cltrace::brute::BruteForce {
                 triangles: tris.clone(),
             },
             &c.camera.pinhole(),
@@ -337,7 +338,7 @@ fn opencl_bvh_matches_on_the_bunny_and_the_teapot() {
 fn stack_overflow_is_an_error_not_an_image() {
     let device = device();
     let c = &cases()[0];
-    let bvh = FlatBvh::new(Bvh::build(&c.mesh, &BuildOptions::default()), &c.mesh);
+    let bvh = Bin32Bvh::new(Bvh::build(&c.mesh, &BuildOptions::default()), &c.mesh);
     assert!(bvh.depth > 3);
     let program = ClTracer::compile_bvh(&device, 2).unwrap();
     let mut tracer = ClTracer::bvh(&device, &program, &bvh).unwrap();
@@ -372,7 +373,7 @@ fn stack_overflow_is_an_error_not_an_image() {
 #[test]
 fn ray_buffers_match_the_host_for_closest_and_any_hits() {
     use cltrace::geometry::Ray;
-    use cltrace::render::cpu::ClosestHit;
+    use cltrace::intersect::ClosestHit;
     use glam::Vec3;
 
     let device = device();
@@ -380,10 +381,10 @@ fn ray_buffers_match_the_host_for_closest_and_any_hits() {
         triangles: 3000,
         seed: 5,
     });
-    let brute = cpu::BruteForce {
+    let brute = cltrace::brute::BruteForce {
         triangles: triangles_in_order(&mesh, 0..mesh.triangle_count() as u32),
     };
-    let flat = FlatBvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
+    let flat = Bin32Bvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
     let mut state = 12345u32;
     let mut unit = move || {
         state = state.wrapping_mul(1664525).wrapping_add(1013904223);
@@ -462,14 +463,14 @@ fn ray_buffers_match_the_host_for_closest_and_any_hits() {
 /// brute force finds, here the edges of nested boxes grazed along their faces.
 #[test]
 fn rays_along_box_faces_match_brute_force() {
+    use cltrace::bvh::{DeviceLayout, Layout};
     use cltrace::geometry::Ray;
-    use cltrace::layout::{DeviceLayout, Layout};
-    use cltrace::render::cpu::ClosestHit;
+    use cltrace::intersect::ClosestHit;
     use glam::Vec3;
 
     let device = device();
     let mesh = generate(Generator::NestedBoxes { count: 3 });
-    let brute = cpu::BruteForce {
+    let brute = cltrace::brute::BruteForce {
         triangles: triangles_in_order(&mesh, 0..mesh.triangle_count() as u32),
     };
     // Every vertex coordinate value, so rays run exactly in the planes of the boxes' faces.
@@ -494,7 +495,7 @@ fn rays_along_box_faces_match_brute_force() {
     }
     let bvh = Bvh::build(&mesh, &BuildOptions::default());
     let sah = bvh.stats().sah_cost;
-    let flat = FlatBvh::new(bvh, &mesh);
+    let flat = Bin32Bvh::new(bvh, &mesh);
     let mut hits = 0;
     for layout in Layout::ALL {
         let laid = DeviceLayout::new(flat.clone(), layout, sah);

@@ -7,15 +7,16 @@ mod common;
 use std::sync::atomic::AtomicBool;
 
 use cltrace::bvh::BuildOptions;
+use cltrace::bvh::Layout;
 use cltrace::camera::Camera;
+use cltrace::camera::CameraSettings;
 use cltrace::device::ClDevice;
 use cltrace::input::generate::Generator;
-use cltrace::input::scene_file::CameraSettings;
-use cltrace::layout::Layout;
 use cltrace::material::{Material, Materials};
 use cltrace::mesh::Mesh;
+use cltrace::render::Method;
 use cltrace::render::integrator::{Accumulation, Lighting, SampleSettings};
-use cltrace::render::{Method, PrepareOptions, Renderer};
+use cltrace::renderer::{PrepareOptions, Renderer};
 use cltrace::report::Timings;
 use common::*;
 use glam::Vec3;
@@ -69,6 +70,7 @@ fn accumulate_with(
     let options = PrepareOptions {
         build: BuildOptions::default(),
         layout: Some(layout),
+        work_group: None,
         sampling: true,
     };
     let mut renderer = Renderer::prepare(

@@ -15,15 +15,17 @@ mod common;
 
 use std::collections::HashMap;
 
+use cltrace::brute::BruteForce;
+use cltrace::bvh::Bin32Bvh;
 use cltrace::bvh::{BuildOptions, Bvh};
 use cltrace::device::ClDevice;
+use cltrace::device::tracer::ClTracer;
 use cltrace::geometry::Ray;
 use cltrace::input::generate::Generator;
 use cltrace::input::load_mesh;
-use cltrace::layout::{FlatBvh, Triangle, triangles_in_order};
+use cltrace::intersect::ClosestHit;
+use cltrace::intersect::{Triangle, triangles_in_order};
 use cltrace::mesh::Mesh;
-use cltrace::render::cpu::{BruteForce, ClosestHit};
-use cltrace::render::opencl::ClTracer;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -391,7 +393,7 @@ fn rays_through_seams_never_slip_between_triangles() {
         let brute = BruteForce {
             triangles: triangles_in_order(&c.mesh, 0..n),
         };
-        let flat = FlatBvh::new(Bvh::build(&c.mesh, &BuildOptions::default()), &c.mesh);
+        let flat = Bin32Bvh::new(Bvh::build(&c.mesh, &BuildOptions::default()), &c.mesh);
         let mut cl_brute = ClTracer::brute(&device, &brute_program, &brute.triangles).unwrap();
         let bvh_program = ClTracer::compile_bvh(&device, flat.depth).unwrap();
         let mut cl_bvh = ClTracer::bvh(&device, &bvh_program, &flat).unwrap();

@@ -7,15 +7,17 @@
 
 use std::path::Path;
 
+use cltrace::brute::BruteForce;
+use cltrace::bvh::Bin32Bvh;
 use cltrace::bvh::{BuildOptions, Builder, Bvh, MAX_DEPTH};
 use cltrace::camera::Camera;
 use cltrace::geometry::{Aabb, Ray};
 use cltrace::input::scene_file::{MeshSource, SceneDescription};
 use cltrace::input::{MeshFormat, parse_mesh_bytes};
-use cltrace::layout::{FlatBvh, triangles_in_order};
+use cltrace::intersect::ClosestHit;
+use cltrace::intersect::WatertightRay;
+use cltrace::intersect::triangles_in_order;
 use cltrace::mesh::Mesh;
-use cltrace::render::cpu::{BruteForce, ClosestHit};
-use cltrace::triangle::WatertightRay;
 use glam::{DVec3, Vec3};
 
 /// Checks the error bad input gets: one line without control characters, starting with
@@ -339,7 +341,7 @@ pub fn bvh(data: &[u8]) -> bool {
             panic!("{options:?}: invalid tree: {e}");
         }
         assert!(bvh.depth <= options.max_depth, "{options:?}: too deep");
-        let flat = FlatBvh::new(bvh, mesh);
+        let flat = Bin32Bvh::new(bvh, mesh);
         for (k, (ray, t_max)) in soup.rays.iter().enumerate() {
             let expected = brute.closest_hit(ray, *t_max);
             let got = flat.closest_hit(ray, *t_max);
@@ -475,7 +477,7 @@ pub fn bvh_raw(data: &[u8]) -> usize {
         }
         let _ = bvh.check(mesh);
         let _ = bvh.stats();
-        let flat = FlatBvh::new(bvh, mesh);
+        let flat = Bin32Bvh::new(bvh, mesh);
         for (ray, t_max) in &soup.rays {
             for any_hit in [false, true] {
                 if let Some((i, _)) = flat.trace(ray, *t_max, any_hit) {

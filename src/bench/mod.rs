@@ -14,6 +14,8 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
+use crate::bvh::Bin32Bvh;
+use crate::bvh::Layout;
 use crate::bvh::{BuildOptions, Bvh};
 use crate::camera::Camera;
 use crate::device::{ClDevice, DeviceSelector, list_devices};
@@ -22,11 +24,10 @@ use crate::geometry::Ray;
 use crate::input::MeshFormat;
 use crate::input::generate::Generator;
 use crate::input::scene_file::MeshSource;
-use crate::layout::FlatBvh;
-use crate::layout::Layout;
 use crate::material::Materials;
 use crate::mesh::Mesh;
-use crate::render::{Method, PrepareOptions, Renderer, Shade, ShadeParams};
+use crate::render::{Method, Shade, ShadeParams};
+use crate::renderer::{PrepareOptions, Renderer};
 use crate::report::{Timings, Verbosity};
 
 /// The kinds of rays of the benchmark protocol.
@@ -73,11 +74,11 @@ pub fn tile_order(width: u32, height: u32, tile: u32) -> impl Iterator<Item = u3
 /// neighbouring pixels start close together and share the nodes around their origins (on
 /// the H100, 16 x 16 tiles traced 4-8% faster than scanline order; README, Performance).
 pub fn diffuse_rays(mesh: &Mesh, camera: &Camera) -> Vec<Ray> {
-    use crate::render::cpu::ClosestHit;
+    use crate::intersect::ClosestHit;
     use crate::render::integrator::facing_normal;
     use crate::render::sampling::{Sampler, cosine_direction};
     use rayon::prelude::*;
-    let bvh = FlatBvh::new(Bvh::build(mesh, &BuildOptions::default()), mesh);
+    let bvh = Bin32Bvh::new(Bvh::build(mesh, &BuildOptions::default()), mesh);
     let offset = 1e-4 * mesh.bounds().extent().length() * 0.5;
     let pinhole = camera.pinhole();
     let width = camera.width;
@@ -173,7 +174,7 @@ pub fn run(req: &BenchRequest) -> Result<Vec<BenchRow>> {
         return Err(Error::Invalid("--repetitions must be at least 1".into()));
     }
     for &(w, h) in &req.resolutions {
-        crate::camera::check_settings(&crate::input::scene_file::CameraSettings {
+        crate::camera::check_settings(&crate::camera::CameraSettings {
             width: Some(w),
             height: Some(h),
             ..Default::default()
@@ -242,6 +243,7 @@ pub fn run(req: &BenchRequest) -> Result<Vec<BenchRow>> {
                     let options = PrepareOptions {
                         build: req.build,
                         layout: Some(layout),
+                        work_group: None,
                         sampling: false,
                     };
                     let mut renderer = Renderer::prepare(
@@ -558,7 +560,7 @@ fn scenes(req: &BenchRequest) -> Result<Vec<BenchScene>> {
         });
     }
     for path in &req.scenes {
-        let description = crate::commands::render::describe_scene(Some(path))?;
+        let description = crate::input::scene_file::SceneDescription::named(Some(path))?;
         scenes.push(BenchScene {
             name: description.mesh.name(),
             source: description.mesh,

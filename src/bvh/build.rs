@@ -15,7 +15,7 @@ use glam::Vec3A;
 use rayon::prelude::*;
 
 use super::{BuildOptions, Builder, Bvh, INTERSECTION_COST, TRAVERSAL_COST};
-use crate::layout::{BvhNode, LEAF_FLAG};
+use crate::bvh::{Bin32Node, LEAF_FLAG};
 use crate::mesh::Mesh;
 
 /// Nodes with more triangles than this build their two subtrees in parallel.
@@ -64,8 +64,8 @@ impl Bounds {
         (self.min + self.max) * 0.5
     }
 
-    fn node(&self, left_or_first: u32, right_or_count: u32) -> BvhNode {
-        BvhNode {
+    fn node(&self, left_or_first: u32, right_or_count: u32) -> Bin32Node {
+        Bin32Node {
             min: self.min.to_array(),
             left_or_first,
             max: self.max.to_array(),
@@ -194,7 +194,7 @@ pub(super) fn build(mesh: &Mesh, options: &BuildOptions) -> Bvh {
     let (tree, depth) = ctx.top(prims, bounds, 1, &mut Scratch::new(options.bins as usize));
     // Zeroed memory comes from the system untouched, so the pages are first touched (and
     // paid for) by the parallel writers, not here.
-    let mut nodes: Vec<BvhNode> = bytemuck::zeroed_vec(tree.node_count());
+    let mut nodes: Vec<Bin32Node> = bytemuck::zeroed_vec(tree.node_count());
     tree.lay_out(&mut nodes, 0);
     Bvh {
         nodes,
@@ -206,13 +206,13 @@ pub(super) fn build(mesh: &Mesh, options: &BuildOptions) -> Bvh {
 /// The tree as the parallel build leaves it: shared top nodes over tasks' subtrees.
 enum Subtree {
     /// A task's subtree, compact and depth-first, child indices counted from its start.
-    Nodes(Vec<BvhNode>),
+    Nodes(Vec<Bin32Node>),
     /// A top node (its child indices not yet known), its two halves, and its node count.
-    Split(BvhNode, Box<(Subtree, Subtree)>, usize),
+    Split(Bin32Node, Box<(Subtree, Subtree)>, usize),
 }
 
 impl Subtree {
-    fn split(node: BvhNode, left: Subtree, right: Subtree) -> Self {
+    fn split(node: Bin32Node, left: Subtree, right: Subtree) -> Self {
         let count = 1 + left.node_count() + right.node_count();
         Subtree::Split(node, Box::new((left, right)), count)
     }
@@ -226,7 +226,7 @@ impl Subtree {
 
     /// Writes the subtree depth-first into `out` (exactly its size), whose first node has
     /// global index `offset`; the halves of top nodes are written in parallel.
-    fn lay_out(self, out: &mut [BvhNode], offset: u32) {
+    fn lay_out(self, out: &mut [Bin32Node], offset: u32) {
         match self {
             Subtree::Nodes(v) => {
                 for (slot, mut node) in out.iter_mut().zip(v) {
@@ -294,7 +294,7 @@ impl Ctx {
         mut prims: Prims,
         bounds: Side,
         depth: u32,
-        out: &mut Vec<BvhNode>,
+        out: &mut Vec<Bin32Node>,
         scratch: &mut Scratch,
     ) -> u32 {
         let index = out.len();

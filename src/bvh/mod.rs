@@ -1,21 +1,29 @@
 //! The bounding volume hierarchy: top-down SAH builders (binned, and an exact full sweep
-//! as the quality reference), tree statistics, and the host's traversal of it.
+//! as the quality reference), post-build optimization, tree statistics, and the device
+//! layouts with their host traversals.
 //!
-//! The builders produce the thesis's layout directly: 32-byte [`BvhNode`]s in depth-first
+//! The builders produce the thesis's layout directly: 32-byte [`Bin32Node`]s in depth-first
 //! order (a node's left child is the next node), leaves holding ranges of
-//! [`Bvh::prim_order`]. The device layouts in [`crate::layout`] start from this tree.
+//! [`Bvh::prim_order`]. The other layouts ([`bin64`], [`wide4`], [`wide8`], [`cwbvh`]) are
+//! made from that tree; [`layout`] names them and lays a tree out in one.
 
+pub mod bin32;
+pub mod bin64;
 mod build;
+pub mod cwbvh;
+pub mod layout;
 pub mod optimize;
 mod stats;
-mod traverse;
+pub mod wide;
+pub mod wide4;
+pub mod wide8;
 
+pub use bin32::{Bin32Bvh, Bin32Node, LEAF_FLAG};
+pub use layout::{DeviceLayout, Layout};
 pub use stats::BvhStats;
-pub use traverse::{ROBUST_EXIT, RayBox};
 
 use serde::Deserialize;
 
-use crate::layout::BvhNode;
 use crate::mesh::Mesh;
 
 /// No tree is deeper than this (nodes on the longest root-to-leaf path). Builders switch
@@ -106,7 +114,7 @@ impl BuildOptions {
 /// A built BVH: nodes in depth-first order (root first) and the leaf order of triangles.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Bvh {
-    pub nodes: Vec<BvhNode>,
+    pub nodes: Vec<Bin32Node>,
     /// `prim_order[i]` is the mesh triangle at position `i` of the leaves' ranges.
     pub prim_order: Vec<u32>,
     /// Nodes on the longest root-to-leaf path (a lone leaf has depth 1).

@@ -29,7 +29,7 @@ use std::collections::BinaryHeap;
 use glam::Vec3A;
 
 use super::{Bvh, INTERSECTION_COST, MAX_DEPTH, TRAVERSAL_COST};
-use crate::layout::{BvhNode, LEAF_FLAG};
+use crate::bvh::{Bin32Node, LEAF_FLAG};
 
 /// Rounds stop once one lowers the SAH cost by less than this fraction of it.
 pub const MIN_ROUND_GAIN: f64 = 0.0001;
@@ -136,7 +136,7 @@ fn prefetch<T>(node: &T) {
     let _ = node;
 }
 
-fn finite(n: &BvhNode) -> bool {
+fn finite(n: &Bin32Node) -> bool {
     n.min.iter().chain(&n.max).all(|v| v.is_finite())
 }
 
@@ -157,7 +157,7 @@ impl Bounds {
     }
 }
 
-fn bounds_of(n: &BvhNode) -> Bounds {
+fn bounds_of(n: &Bin32Node) -> Bounds {
     Bounds {
         min: Vec3A::from(n.min),
         max: Vec3A::from(n.max),
@@ -526,7 +526,7 @@ impl Tree {
     /// Lays the tree out depth-first, the leaves (and their triangle ranges) copied from
     /// `built` in the new order.
     fn to_bvh(&self, built: &Bvh) -> Bvh {
-        let mut nodes: Vec<BvhNode> = Vec::with_capacity(built.nodes.len());
+        let mut nodes: Vec<Bin32Node> = Vec::with_capacity(built.nodes.len());
         let mut prim_order = Vec::with_capacity(built.prim_order.len());
         let mut depth = 0;
         // (node, the index of the parent whose right child it is or NONE, its depth)
@@ -541,14 +541,14 @@ impl Tree {
             if n.child[0] == NONE {
                 let leaf = built.nodes[i as usize];
                 let (first, count) = (leaf.left_or_first as usize, leaf.count() as usize);
-                nodes.push(BvhNode {
+                nodes.push(Bin32Node {
                     left_or_first: prim_order.len() as u32,
                     right_or_count: LEAF_FLAG | count as u32,
                     ..leaf
                 });
                 prim_order.extend_from_slice(&built.prim_order[first..first + count]);
             } else {
-                nodes.push(BvhNode {
+                nodes.push(Bin32Node {
                     min: n.bounds.min.to_array(),
                     left_or_first: index + 1,
                     max: n.bounds.max.to_array(),

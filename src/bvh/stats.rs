@@ -3,8 +3,8 @@
 use glam::Vec3;
 
 use super::{Bvh, INTERSECTION_COST, MAX_DEPTH, TRAVERSAL_COST};
+use crate::bvh::Bin32Node;
 use crate::geometry::Aabb;
-use crate::layout::BvhNode;
 use crate::mesh::Mesh;
 
 /// Summary numbers of a BVH.
@@ -21,7 +21,7 @@ pub struct BvhStats {
     pub sah_cost: f64,
 }
 
-fn node_box(n: &BvhNode) -> Aabb {
+fn node_box(n: &Bin32Node) -> Aabb {
     Aabb {
         min: Vec3::from(n.min),
         max: Vec3::from(n.max),

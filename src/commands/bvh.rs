@@ -3,17 +3,17 @@
 use std::fmt::Write;
 use std::path::Path;
 
+use crate::bvh::{Bin32Bvh, DeviceLayout, Layout};
 use crate::bvh::{BuildOptions, Bvh, INTERSECTION_COST, TRAVERSAL_COST};
-use crate::commands::render::describe_scene;
 use crate::error::Result;
-use crate::layout::{DeviceLayout, FlatBvh, Layout};
+use crate::input::scene_file::SceneDescription;
 use crate::report::{Timings, format_ms};
 
 /// Loads the scene's mesh, builds its BVH `repeat` times (the fastest build is reported)
 /// and returns the report.
 pub fn bvh_report(scene: Option<&Path>, options: &BuildOptions, repeat: u32) -> Result<String> {
     options.check()?;
-    let scene = describe_scene(scene)?;
+    let scene = SceneDescription::named(scene)?;
     let mut timings = Timings::default();
     let mesh = timings.time("load", || scene.mesh.load())?;
     // The optimization is timed apart from the build (both the best of `repeat`).
@@ -47,7 +47,7 @@ pub fn bvh_report(scene: Option<&Path>, options: &BuildOptions, repeat: u32) -> 
         (report, ms)
     });
     let s = bvh.stats();
-    let flat = FlatBvh::new(bvh, &mesh);
+    let flat = Bin32Bvh::new(bvh, &mesh);
     // Every device layout made from the tree, with what it costs to make and to hold.
     let layouts: Vec<(DeviceLayout, f64)> = Layout::ALL
         .iter()

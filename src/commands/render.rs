@@ -1,17 +1,19 @@
 //! `cltrace render`: scene in, image out, every stage timed.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use crate::bvh::BuildOptions;
 use crate::camera::Camera;
+use crate::camera::CameraSettings;
 use crate::device::{ClDevice, DeviceSelector};
 use crate::error::Error;
 use crate::error::Result;
 use crate::geometry::Aabb;
-use crate::input::scene_file::{CameraSettings, RenderSettings, SceneDescription};
+use crate::input::scene_file::{RenderSettings, SceneDescription};
 use crate::output;
 use crate::render::integrator::{Accumulation, Light, Lighting, SampleSettings};
-use crate::render::{Frame, Method, PrepareOptions, Renderer, Shade, ShadeParams, tone_map};
+use crate::render::{Frame, Method, Shade, ShadeParams, tone_map};
+use crate::renderer::{PrepareOptions, Renderer};
 use crate::report::{Timings, Verbosity};
 
 /// The method when neither the scene nor the flags name one.
@@ -52,6 +54,9 @@ pub struct RenderRequest {
     pub build: BuildOptions,
     /// Where to go when the OpenCL device fails; `None` means the error ends the run.
     pub fallback: Option<Fallback>,
+    /// The tuning cache to read the device's layout and work-group from (`cltrace tune`
+    /// writes it); `None` reads none.
+    pub tune_cache: Option<PathBuf>,
     pub verbosity: Verbosity,
 }
 
@@ -132,26 +137,12 @@ pub fn sample_settings(
     Ok(Some((settings, render.spp.unwrap_or(default_spp))))
 }
 
-/// Reads the scene description a render request names.
-pub fn describe_scene(scene: Option<&Path>) -> Result<SceneDescription> {
-    match scene {
-        None => Ok(SceneDescription::builtin_default()),
-        Some(p)
-            if p.extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("toml")) =>
-        {
-            SceneDescription::load(p)
-        }
-        Some(p) => Ok(SceneDescription::from_mesh(p)),
-    }
-}
-
 /// Runs a render request end to end. Every check that needs no work (output format and
 /// folder, resolution, field of view, device) happens before the mesh is loaded. With
 /// `--fallback cpu`, a device failure (none found, a failed build, out of memory, lost)
 /// reruns the render on the host, saying so; without it, it is the run's error.
 pub fn run(req: &RenderRequest) -> Result<RenderOutcome> {
-    let scene = describe_scene(req.scene.as_deref())?;
+    let scene = SceneDescription::named(req.scene.as_deref())?;
     let method = req
         .render
         .method
@@ -238,9 +229,19 @@ fn render_with(
     let sampling = sample_settings(&render, shade, &bounds)?;
     let shade = ShadeParams::new(shade, &camera, &bounds);
 
+    // What `cltrace tune` found for this device: its layout unless one is asked for, and
+    // its work-group shape.
+    let tuned = match (&device, method) {
+        (Some(d), Method::ClBvh) => req
+            .tune_cache
+            .as_deref()
+            .and_then(|path| crate::tune::TuneCache::load(path).get(&d.info).cloned()),
+        _ => None,
+    };
     let options = PrepareOptions {
         build: req.build,
-        layout: render.layout,
+        layout: render.layout.or(tuned.as_ref().map(|t| t.layout)),
+        work_group: tuned.map(|t| t.work_group),
         sampling: sampling.is_some(),
     };
     let mut renderer = Renderer::prepare(

@@ -3,16 +3,43 @@
 
 mod pitched;
 mod program;
+pub mod tracer;
 
 pub use pitched::PitchedBuffer;
 pub use program::KernelSource;
+pub use tracer::ClTracer;
 
 use std::fmt;
 use std::str::FromStr;
 
 use ocl::core::{DeviceInfo as Info, DeviceInfoResult as R, DeviceType};
 
+use crate::bvh::Layout;
 use crate::error::{Error, Result};
+
+macro_rules! ocl_prm {
+    ($($t:ty),*) => {$(
+        // SAFETY: plain-old-data with a fixed C layout, mirrored in the kernels
+        // (tests/layout.rs compares the two).
+        unsafe impl ocl::OclPrm for $t {}
+    )*};
+}
+ocl_prm!(
+    crate::intersect::Triangle,
+    crate::bvh::Bin32Node,
+    crate::render::Hit,
+    crate::material::Material
+);
+
+/// The layout for a device nobody has tuned: wide nodes for CPUs (their boxes go through
+/// SIMD lanes), Aila–Laine binary nodes elsewhere (the fastest for primary and diffuse rays
+/// on the H100: docs/performance.md).
+pub fn default_layout(device: &DeviceInfo) -> Layout {
+    match device.kind {
+        DeviceKind::Cpu => Layout::Wide8,
+        _ => Layout::Bin64,
+    }
+}
 
 /// How to get an OpenCL device on Debian or Ubuntu; part of every "no device" error.
 pub const INSTALL_HINT: &str = "install an OpenCL driver, e.g. PoCL for the CPU: \

@@ -22,10 +22,11 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
+use crate::bvh::Layout;
+use crate::camera::CameraSettings;
 use crate::error::{Error, Result};
 use crate::input::generate::Generator;
 use crate::input::load_mesh;
-use crate::layout::Layout;
 use crate::mesh::Mesh;
 use crate::render::{Method, Shade};
 
@@ -72,33 +73,6 @@ impl MeshSource {
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_else(|| path.display().to_string()),
             MeshSource::Generator(g) => g.name(),
-        }
-    }
-}
-
-/// Camera settings; `None` means "not said here" (a later layer or the auto framing decides).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct CameraSettings {
-    pub eye: Option<[f32; 3]>,
-    pub look_at: Option<[f32; 3]>,
-    pub up: Option<[f32; 3]>,
-    /// Vertical field of view in degrees.
-    pub fov: Option<f32>,
-    pub width: Option<u32>,
-    pub height: Option<u32>,
-}
-
-impl CameraSettings {
-    /// Each setting from `self` where given, else from `base`.
-    pub fn over(self, base: CameraSettings) -> CameraSettings {
-        CameraSettings {
-            eye: self.eye.or(base.eye),
-            look_at: self.look_at.or(base.look_at),
-            up: self.up.or(base.up),
-            fov: self.fov.or(base.fov),
-            width: self.width.or(base.width),
-            height: self.height.or(base.height),
         }
     }
 }
@@ -161,6 +135,21 @@ struct SceneFile {
 }
 
 impl SceneDescription {
+    /// The scene a command names: a scene file (`.toml`), a mesh file, or for `None` the
+    /// built-in default scene.
+    pub fn named(scene: Option<&Path>) -> Result<SceneDescription> {
+        match scene {
+            None => Ok(SceneDescription::builtin_default()),
+            Some(p)
+                if p.extension()
+                    .is_some_and(|e| e.eq_ignore_ascii_case("toml")) =>
+            {
+                SceneDescription::load(p)
+            }
+            Some(p) => Ok(SceneDescription::from_mesh(p)),
+        }
+    }
+
     /// Reads a scene file; a mesh path in it is taken relative to the file's folder.
     pub fn load(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path)

@@ -9,11 +9,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::cpu::ClosestHit;
 use super::sampling::{Sampler, bounce_dim, cosine_direction, triangle_point};
 use crate::camera::Pinhole;
 use crate::geometry::Ray;
-use crate::layout::Triangle;
+use crate::intersect::ClosestHit;
+use crate::intersect::Triangle;
 use crate::material::Material;
 
 /// Share of the light in `shadow` mode that reaches surfaces the light does not.

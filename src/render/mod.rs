@@ -3,12 +3,9 @@
 
 pub mod cpu;
 pub mod integrator;
-pub mod opencl;
-mod renderer;
 pub mod sampling;
 mod shade;
 
-pub use renderer::{PrepareOptions, Renderer, TraceTimes};
 pub use shade::{ShadeParams, tone_map};
 
 use bytemuck::{Pod, Zeroable};
@@ -123,9 +120,6 @@ impl Hit {
         self.prim == MISS
     }
 }
-
-// SAFETY: plain-old-data with a fixed C layout, mirrored in cl/cltrace.h.
-unsafe impl ocl::OclPrm for Hit {}
 
 /// A rendered frame: per-pixel hits and RGBA8 colours (packed little-endian in a u32),
 /// row-major, `y` down.

@@ -5,7 +5,7 @@ use glam::Vec3;
 use super::Shade;
 use crate::camera::Camera;
 use crate::geometry::Aabb;
-use crate::layout::Triangle;
+use crate::intersect::Triangle;
 
 /// What shading needs besides the hit: the mode and, for depth, the distance range that
 /// maps to white..black (the scene's bounding sphere seen from the eye).

@@ -4,17 +4,19 @@
 
 use std::path::PathBuf;
 
+use cltrace::brute::BruteForce;
+use cltrace::bvh::Bin32Bvh;
 use cltrace::bvh::{BuildOptions, Builder};
 use cltrace::camera::{Camera, Pinhole};
 use cltrace::device::{ClDevice, DeviceSelector};
 use cltrace::geometry::Ray;
 use cltrace::input::generate::Generator;
 use cltrace::input::load_mesh;
-use cltrace::layout::{FlatBvh, Triangle, triangles_in_order};
+use cltrace::intersect::ClosestHit;
+use cltrace::intersect::WatertightRay;
+use cltrace::intersect::{Triangle, triangles_in_order};
 use cltrace::mesh::Mesh;
 use cltrace::render::Frame;
-use cltrace::render::cpu::{BruteForce, ClosestHit};
-use cltrace::triangle::WatertightRay;
 use glam::Vec3;
 use proptest::prelude::*;
 
@@ -131,7 +133,7 @@ pub fn all_options() -> Vec<BuildOptions> {
 }
 
 /// Closest hits through the BVH equal brute force's: the same triangle, or an exact tie.
-pub fn same_hits(mesh: &Mesh, bvh: &FlatBvh, rays: &[Ray]) -> Result<(), String> {
+pub fn same_hits(mesh: &Mesh, bvh: &Bin32Bvh, rays: &[Ray]) -> Result<(), String> {
     let brute = BruteForce {
         triangles: triangles_in_order(mesh, 0..mesh.triangle_count() as u32),
     };

@@ -16,8 +16,9 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use super::{FlatBvh, Triangle};
+use super::Bin32Bvh;
 use crate::bvh::{INTERSECTION_COST, TRAVERSAL_COST};
+use crate::intersect::Triangle;
 
 /// Triangles a leaf child holds at most (the metadata's unary count has 3 bits).
 pub const MAX_LEAF_TRIANGLES: usize = 3;
@@ -27,10 +28,10 @@ const INNER_META: u8 = 0b001_11000;
 
 /// An 80-byte compressed 8-wide node. Child `k`'s box on axis `a` is
 /// `origin[a] + lo_a[k] * 2^(exponent[a] - 127)` to the same with `hi_a[k]`.
-/// Mirrors `CompressedNode` in cl/cltrace.h.
+/// Mirrors `CwbvhNode` in cl/cltrace.h.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct CompressedNode {
+pub struct CwbvhNode {
     /// The grid's origin: the node's box minimum.
     pub origin: [f32; 3],
     /// The grid's spacing per axis as a biased power-of-two exponent (an f32's exponent).
@@ -52,7 +53,7 @@ pub struct CompressedNode {
     pub hi_z: [u8; 8],
 }
 
-impl CompressedNode {
+impl CwbvhNode {
     /// The grid spacing on `axis`, as the kernel computes it.
     pub fn scale(&self, axis: usize) -> f32 {
         f32::from_bits((self.exponent[axis] as u32) << 23)
@@ -130,7 +131,7 @@ pub enum Child {
 /// A compressed tree: nodes (root first), triangles in the order its leaves reference them,
 /// its depth in nodes and its SAH cost (one traversal step per wide node).
 pub struct Compressed {
-    pub nodes: Vec<CompressedNode>,
+    pub nodes: Vec<CwbvhNode>,
     pub triangles: Vec<Triangle>,
     pub depth: u32,
     pub sah_cost: f64,
@@ -160,9 +161,9 @@ impl Binary {
 }
 
 /// Rebuilds a thesis-layout tree as a compressed 8-wide tree.
-pub fn compress(flat: &FlatBvh) -> Compressed {
+pub fn compress(flat: &Bin32Bvh) -> Compressed {
     let tree = small_leaves(flat);
-    let mut nodes = vec![CompressedNode::default()];
+    let mut nodes = vec![CwbvhNode::default()];
     let mut triangles = Vec::with_capacity(flat.triangles.len());
     let mut cost = 0.0;
     let mut depth = 0;
@@ -172,7 +173,7 @@ pub fn compress(flat: &FlatBvh) -> Compressed {
         depth = depth.max(d);
         cost += TRAVERSAL_COST as f64 * tree[root].area();
         let children = slots(&tree, open(&tree, root), tree[root].centre());
-        let mut node = CompressedNode {
+        let mut node = CwbvhNode {
             child_base: nodes.len() as u32,
             triangle_base: triangles.len() as u32,
             ..Default::default()
@@ -197,7 +198,7 @@ pub fn compress(flat: &FlatBvh) -> Compressed {
             todo.push((*c, next, d + 1));
             next += 1;
         }
-        nodes.resize(next, CompressedNode::default());
+        nodes.resize(next, CwbvhNode::default());
         nodes[index] = node;
     }
     let root_area = tree[0].area();
@@ -215,7 +216,7 @@ pub fn compress(flat: &FlatBvh) -> Compressed {
 
 /// The flat tree as [`Binary`] nodes (root first), every leaf of more than
 /// [`MAX_LEAF_TRIANGLES`] triangles split in halves of its range until none is.
-fn small_leaves(flat: &FlatBvh) -> Vec<Binary> {
+fn small_leaves(flat: &Bin32Bvh) -> Vec<Binary> {
     let mut out: Vec<Binary> = Vec::with_capacity(flat.nodes.len() * 2);
     // (flat node or a leaf's range, where to link it), depth-first.
     enum Todo {
@@ -344,7 +345,7 @@ fn slots(tree: &[Binary], children: Vec<usize>, centre: Vec3) -> [Option<usize>;
 
 /// Sets the node's grid and its children's quantized boxes, each plane checked to contain
 /// the child's true box under the kernel's f32 arithmetic.
-fn quantize(node: &mut CompressedNode, tree: &[Binary], children: &[Option<usize>; 8]) {
+fn quantize(node: &mut CwbvhNode, tree: &[Binary], children: &[Option<usize>; 8]) {
     let present: Vec<(usize, &Binary)> = children
         .iter()
         .enumerate()
@@ -417,7 +418,7 @@ mod tests {
 
     /// Every triangle is referenced exactly once and lies inside every box on its path
     /// (their intersection is carried down), every node is reached once.
-    fn check(c: &Compressed, flat: &FlatBvh) {
+    fn check(c: &Compressed, flat: &Bin32Bvh) {
         let mut seen = vec![0u32; c.triangles.len()];
         let all = (Vec3::NEG_INFINITY, Vec3::INFINITY);
         let mut todo = vec![(0u32, all)];
@@ -461,12 +462,12 @@ mod tests {
         assert_eq!(prims, expected);
     }
 
-    fn flat(mesh: &Mesh, max_leaf_size: u32) -> FlatBvh {
+    fn flat(mesh: &Mesh, max_leaf_size: u32) -> Bin32Bvh {
         let options = BuildOptions {
             max_leaf_size,
             ..Default::default()
         };
-        FlatBvh::new(Bvh::build(mesh, &options), mesh)
+        Bin32Bvh::new(Bvh::build(mesh, &options), mesh)
     }
 
     #[test]
@@ -513,7 +514,7 @@ mod tests {
         );
         runner
             .run(&case, |(origin, exponent, q, org, aim, inside)| {
-                let mut node = CompressedNode {
+                let mut node = CwbvhNode {
                     origin,
                     exponent,
                     ..Default::default()

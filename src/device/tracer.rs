@@ -8,14 +8,15 @@ use indicatif::{ProgressBar, ProgressStyle};
 use ocl::enums::ProfilingInfo;
 use ocl::prm::Float4;
 
-use super::integrator::{Accumulation, Emitters, Light, Lighting, SampleSettings};
-use super::{Frame, Hit, ShadeParams};
+use super::{ClDevice, KernelSource, PitchedBuffer};
+use crate::bvh::{Bin32Bvh, DeviceLayout, Layout};
 use crate::camera::Pinhole;
-use crate::device::{ClDevice, KernelSource, PitchedBuffer};
 use crate::error::{Error, Result};
 use crate::geometry::Ray;
-use crate::layout::{DeviceLayout, FlatBvh, Layout, Triangle};
+use crate::intersect::Triangle;
 use crate::material::Material;
+use crate::render::integrator::{Accumulation, Emitters, Light, Lighting, SampleSettings};
+use crate::render::{Frame, Hit, ShadeParams};
 
 /// Default bound on one kernel launch, in milliseconds of device time.
 pub const LAUNCH_TARGET_MS: f64 = 100.0;
@@ -154,7 +155,7 @@ impl<'d> ClTracer<'d> {
     }
 
     /// Uploads a thesis-layout BVH for kernels compiled with [`ClTracer::compile_bvh`].
-    pub fn bvh(device: &'d ClDevice, program: &ocl::Program, bvh: &FlatBvh) -> Result<Self> {
+    pub fn bvh(device: &'d ClDevice, program: &ocl::Program, bvh: &Bin32Bvh) -> Result<Self> {
         let mut t = Self::with_nodes(
             device,
             program,

@@ -4,14 +4,14 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use super::{BvhNode, FlatBvh};
+use super::{Bin32Bvh, Bin32Node};
 
 /// A 64-byte node: both children's boxes, then their references. A child with `count` 0 is
 /// an inner node (`child` indexes the node array); with `count > 0` it is a leaf of `count`
-/// triangles from `child`. Mirrors `Bvh64Node` in cl/cltrace.h.
+/// triangles from `child`. Mirrors `Bin64Node` in cl/cltrace.h.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct Bvh64Node {
+pub struct Bin64Node {
     /// Left child: min.x, max.x, min.y, max.y.
     pub left_xy: [f32; 4],
     /// Right child: min.x, max.x, min.y, max.y.
@@ -24,7 +24,7 @@ pub struct Bvh64Node {
 
 /// Rebuilds a thesis-layout tree in the Aila–Laine layout, depth-first. A tree that is a
 /// single leaf gets a root whose two children are that same leaf.
-pub fn to_bvh64(flat: &FlatBvh) -> Vec<Bvh64Node> {
+pub fn to_bvh64(flat: &Bin32Bvh) -> Vec<Bin64Node> {
     let nodes = &flat.nodes;
     let root = &nodes[0];
     if root.is_leaf() {
@@ -62,9 +62,9 @@ pub fn to_bvh64(flat: &FlatBvh) -> Vec<Bvh64Node> {
         .collect()
 }
 
-fn pair(l: &BvhNode, r: &BvhNode, lref: u32, rref: u32) -> Bvh64Node {
-    let leaf_count = |n: &BvhNode| if n.is_leaf() { n.count() } else { 0 };
-    Bvh64Node {
+fn pair(l: &Bin32Node, r: &Bin32Node, lref: u32, rref: u32) -> Bin64Node {
+    let leaf_count = |n: &Bin32Node| if n.is_leaf() { n.count() } else { 0 };
+    Bin64Node {
         left_xy: [l.min[0], l.max[0], l.min[1], l.max[1]],
         right_xy: [r.min[0], r.max[0], r.min[1], r.max[1]],
         z: [l.min[2], l.max[2], r.min[2], r.max[2]],

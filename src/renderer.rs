@@ -8,19 +8,17 @@ use std::sync::atomic::AtomicBool;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
-use super::integrator::{self, Accumulation, Emitters, SampleSettings};
-use super::opencl::ClTracer;
-use super::{Frame, Hit, Method, ShadeParams, cpu};
-use crate::bvh::{BuildOptions, Bvh, BvhStats};
+use crate::brute::BruteForce;
+use crate::bvh::{Bin32Bvh, Bin32Node, BuildOptions, Bvh, BvhStats, DeviceLayout, Layout};
 use crate::camera::Camera;
-use crate::device::ClDevice;
+use crate::device::{ClDevice, ClTracer, default_layout};
 use crate::error::Result;
 use crate::geometry::Ray;
-use crate::layout::{
-    BvhNode, DeviceLayout, FlatBvh, Layout, Triangle, assign_materials, triangles_in_order,
-};
+use crate::intersect::{ClosestHit, Triangle, triangles_in_order};
 use crate::material::{Material, Materials};
 use crate::mesh::Mesh;
+use crate::render::integrator::{self, Accumulation, Emitters, SampleSettings};
+use crate::render::{Frame, Hit, Method, ShadeParams, cpu};
 use crate::report::Timings;
 
 /// A method made ready for one mesh (on one device, for the OpenCL methods).
@@ -37,8 +35,8 @@ pub struct Renderer<'d> {
 }
 
 enum Tracer<'d> {
-    CpuBrute(cpu::BruteForce),
-    CpuBvh(FlatBvh),
+    CpuBrute(BruteForce),
+    CpuBvh(Bin32Bvh),
     Cl(Box<ClTracer<'d>>),
 }
 
@@ -48,8 +46,12 @@ pub struct PrepareOptions {
     /// How the BVH methods build their tree.
     pub build: BuildOptions,
     /// The node layout `cl-bvh` uploads (the host methods always use the thesis's); `None`
-    /// takes the device's tuned one, else its default ([`crate::tune::default_layout`]).
+    /// takes the device's default ([`default_layout`]).
     pub layout: Option<Layout>,
+    /// The OpenCL kernels' work-group shape (pixels across, down); `None` for the
+    /// tracer's default. One the device cannot run is ignored (it may come from a stale
+    /// tuning cache).
+    pub work_group: Option<[usize; 2]>,
     /// Also compile the progressive shade modes (OpenCL methods).
     pub sampling: bool,
 }
@@ -79,19 +81,20 @@ impl<'d> Renderer<'d> {
         let (flat, mut bvh) = if method.uses_bvh() {
             let bvh = timings.time("build", || Bvh::build(mesh, build));
             let stats = bvh.stats();
-            let mut flat = timings.time("layout", || FlatBvh::new(bvh, mesh));
-            assign_materials(&mut flat.triangles, materials);
+            let mut flat = timings.time("layout", || Bin32Bvh::new(bvh, mesh));
+            materials.assign(&mut flat.triangles);
             (Some(flat), Some(stats))
         } else {
             (None, None)
         };
         let all = || {
             let mut t = triangles_in_order(mesh, 0..mesh.triangle_count() as u32);
-            assign_materials(&mut t, materials);
+            materials.assign(&mut t);
             t
         };
-        let bytes =
-            |nodes: usize, tris: usize| nodes * size_of::<BvhNode>() + tris * size_of::<Triangle>();
+        let bytes = |nodes: usize, tris: usize| {
+            nodes * size_of::<Bin32Node>() + tris * size_of::<Triangle>()
+        };
         let device = || device.expect("OpenCL methods are given a device");
         let (tracer, scene_bytes, emitters) = match (method, flat) {
             (Method::CpuBrute, _) => {
@@ -99,7 +102,7 @@ impl<'d> Renderer<'d> {
                 let emitters = Emitters::new(&triangles, &materials.list);
                 let n = triangles.len();
                 (
-                    Tracer::CpuBrute(cpu::BruteForce { triangles }),
+                    Tracer::CpuBrute(BruteForce { triangles }),
                     bytes(0, n),
                     emitters,
                 )
@@ -129,11 +132,9 @@ impl<'d> Renderer<'d> {
             (Method::ClBvh, Some(flat)) => {
                 let device = device();
                 let sah = bvh.map_or(0.0, |s| s.sah_cost);
-                let tuned = crate::tune::cached(&device.info);
                 let layout = options
                     .layout
-                    .or(tuned.as_ref().map(|t| t.layout))
-                    .unwrap_or_else(|| crate::tune::default_layout(&device.info));
+                    .unwrap_or_else(|| default_layout(&device.info));
                 let laid = timings.time("layout", || DeviceLayout::new(flat, layout, sah));
                 // After the layout: the compressed one reorders the triangles.
                 let emitters = Emitters::new(&laid.triangles, &materials.list);
@@ -143,9 +144,9 @@ impl<'d> Renderer<'d> {
                 let tracer = timings.time("upload", || -> Result<ClTracer> {
                     let mut t = ClTracer::with_layout(device, &program, &laid)?;
                     t.set_lights(&materials.list, &emitters)?;
-                    if let Some(tuning) = &tuned {
+                    if let Some(shape) = options.work_group {
                         // A cache that no longer fits the device is ignored, not fatal.
-                        let _ = t.set_work_group(tuning.work_group);
+                        let _ = t.set_work_group(shape);
                     }
                     Ok(t)
                 })?;
@@ -347,7 +348,7 @@ impl<'d> Renderer<'d> {
 
 impl Tracer<'_> {
     /// The host tracer of the CPU methods (`None` for OpenCL).
-    fn host(&self) -> Option<&dyn cpu::ClosestHit> {
+    fn host(&self) -> Option<&dyn ClosestHit> {
         match self {
             Tracer::CpuBrute(t) => Some(t),
             Tracer::CpuBvh(t) => Some(t),

@@ -1,13 +1,12 @@
-//! Wide BVHs: the binary tree collapsed into nodes of up to 4 or 8 children, their boxes
-//! stored axis by axis so that one vector operation tests a plane of every child.
+//! What the wide layouts ([`super::wide4`], [`super::wide8`]) share: the binary tree
+//! collapsed into nodes of up to 4 or 8 children, their boxes stored axis by axis so that
+//! one vector operation tests a plane of every child (`cl/wide.cl`).
 //!
 //! The collapse is greedy by surface area: a node starts with its two children and, while
 //! it has room, replaces its largest inner child by that child's own children. Leaves stay
 //! as they are.
 
-use bytemuck::{Pod, Zeroable};
-
-use super::{BvhNode, FlatBvh};
+use super::bin32::{Bin32Bvh, Bin32Node};
 use crate::bvh::{INTERSECTION_COST, TRAVERSAL_COST};
 
 /// Marks an unused child slot in a wide node's `count`.
@@ -42,14 +41,14 @@ macro_rules! wide_node {
                     min_z: [0.0; $n],
                     max_z: [0.0; $n],
                     child: [0; $n],
-                    count: [EMPTY_SLOT; $n],
+                    count: [super::wide::EMPTY_SLOT; $n],
                 }
             }
         }
 
-        impl WideNode for $name {
+        impl super::wide::WideNode for $name {
             const WIDTH: usize = $n;
-            fn set(&mut self, slot: usize, b: &BvhNode, child: u32, count: u32) {
+            fn set(&mut self, slot: usize, b: &super::bin32::Bin32Node, child: u32, count: u32) {
                 self.min_x[slot] = b.min[0];
                 self.max_x[slot] = b.max[0];
                 self.min_y[slot] = b.min[1];
@@ -63,14 +62,13 @@ macro_rules! wide_node {
     };
 }
 
-wide_node!(Wide4Node, 4);
-wide_node!(Wide8Node, 8);
+pub(super) use wide_node;
 
 /// What the collapse needs of a wide node type.
 pub trait WideNode: Default + Copy {
     const WIDTH: usize;
     /// Puts the child with box `b` in `slot`.
-    fn set(&mut self, slot: usize, b: &BvhNode, child: u32, count: u32);
+    fn set(&mut self, slot: usize, b: &Bin32Node, child: u32, count: u32);
 }
 
 /// A collapsed tree: nodes depth-first (root first), its depth in wide nodes, and its SAH
@@ -106,9 +104,9 @@ pub(super) fn open_largest(
 }
 
 /// Collapses the thesis-layout tree into nodes of up to `N::WIDTH` children.
-pub fn collapse<N: WideNode>(flat: &FlatBvh) -> Collapsed<N> {
+pub fn collapse<N: WideNode>(flat: &Bin32Bvh) -> Collapsed<N> {
     let nodes = &flat.nodes;
-    let area = |n: &BvhNode| {
+    let area = |n: &Bin32Node| {
         let e = [
             n.max[0] - n.min[0],
             n.max[1] - n.min[1],

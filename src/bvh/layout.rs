@@ -1,0 +1,147 @@
+//! The device layouts `--layout` chooses among, and a built tree laid out in one of them
+//! (node bytes, triangles, stack size). Each layout is its own module of `bvh/`, named as
+//! the CLI, its node type and its kernel file name it.
+
+use super::bin32::Bin32Bvh;
+use super::{bin64, cwbvh, wide, wide4, wide8};
+use crate::intersect::Triangle;
+
+/// The device layouts `--layout` chooses among.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    Hash,
+    clap::ValueEnum,
+    serde::Deserialize,
+    serde::Serialize,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum Layout {
+    /// The thesis's 32-byte binary node: a node's box is stored in the node.
+    #[default]
+    Bin32,
+    /// Aila–Laine: 64-byte binary nodes holding both children's boxes.
+    Bin64,
+    /// 4-wide nodes (128 bytes), collapsed from the binary tree.
+    Wide4,
+    /// 8-wide nodes (256 bytes), collapsed from the binary tree.
+    Wide8,
+    /// Compressed 8-wide nodes (80 bytes, child boxes quantized to 8 bits; Ylitie et al.
+    /// 2017), leaves of at most 3 triangles.
+    Cwbvh,
+}
+
+impl Layout {
+    pub const ALL: [Layout; 5] = [
+        Layout::Bin32,
+        Layout::Bin64,
+        Layout::Wide4,
+        Layout::Wide8,
+        Layout::Cwbvh,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Layout::Bin32 => "bin32",
+            Layout::Bin64 => "bin64",
+            Layout::Wide4 => "wide4",
+            Layout::Wide8 => "wide8",
+            Layout::Cwbvh => "cwbvh",
+        }
+    }
+
+    /// The kernels' `LAYOUT` define.
+    pub fn code(self) -> u32 {
+        match self {
+            Layout::Bin32 => 32,
+            Layout::Bin64 => 64,
+            Layout::Wide4 => 4,
+            Layout::Wide8 => 8,
+            Layout::Cwbvh => 80,
+        }
+    }
+}
+
+/// A BVH in one of the device layouts: node bytes, triangles in leaf order, and the
+/// traversal stack the kernels need for it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DeviceLayout {
+    pub layout: Layout,
+    /// The nodes, as the kernels read them.
+    pub nodes: Vec<u8>,
+    pub node_count: usize,
+    pub triangles: Vec<Triangle>,
+    /// Entries the traversal stack needs: the depth for binary layouts, (width - 1) per
+    /// level of a wide tree, one per level of a compressed one (a node's unvisited children
+    /// share one entry).
+    pub stack_size: u32,
+    /// The SAH cost of the tree as laid out (wide nodes count one traversal step each).
+    pub sah_cost: f64,
+}
+
+impl DeviceLayout {
+    /// Lays the thesis-layout tree out as `layout`; `sah_cost` is the binary tree's.
+    pub fn new(flat: Bin32Bvh, layout: Layout, sah_cost: f64) -> Self {
+        let depth = flat.depth.max(1);
+        // The compressed layout reorders the triangles; the others keep the tree's order.
+        let mut reordered = None;
+        let (nodes, node_count, stack_size, sah_cost) = match layout {
+            Layout::Bin32 => (
+                bytemuck::cast_slice(&flat.nodes).to_vec(),
+                flat.nodes.len(),
+                depth,
+                sah_cost,
+            ),
+            Layout::Bin64 => {
+                let n = bin64::to_bvh64(&flat);
+                (bytemuck::cast_slice(&n).to_vec(), n.len(), depth, sah_cost)
+            }
+            Layout::Wide4 => {
+                let c = wide::collapse::<wide4::Wide4Node>(&flat);
+                (
+                    bytemuck::cast_slice(&c.nodes).to_vec(),
+                    c.nodes.len(),
+                    3 * c.depth + 1,
+                    c.sah_cost,
+                )
+            }
+            Layout::Wide8 => {
+                let c = wide::collapse::<wide8::Wide8Node>(&flat);
+                (
+                    bytemuck::cast_slice(&c.nodes).to_vec(),
+                    c.nodes.len(),
+                    7 * c.depth + 1,
+                    c.sah_cost,
+                )
+            }
+            Layout::Cwbvh => {
+                let c = cwbvh::compress(&flat);
+                reordered = Some(c.triangles);
+                (
+                    bytemuck::cast_slice(&c.nodes).to_vec(),
+                    c.nodes.len(),
+                    c.depth + 1,
+                    c.sah_cost,
+                )
+            }
+        };
+        DeviceLayout {
+            layout,
+            nodes,
+            node_count,
+            triangles: reordered.unwrap_or(flat.triangles),
+            stack_size,
+            sah_cost,
+        }
+    }
+
+    /// Bytes the device holds per triangle (nodes and triangles together).
+    pub fn bytes_per_triangle(&self) -> f64 {
+        (self.nodes.len() + self.triangles.len() * size_of::<Triangle>()) as f64
+            / self.triangles.len() as f64
+    }
+}
