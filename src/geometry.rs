@@ -1,6 +1,6 @@
 //! Rays and axis-aligned boxes, the two shapes every stage speaks.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// A ray `origin + t * dir`. `dir` need not be unit length: primary rays keep the
 /// unnormalised pixel direction so that the host and the device compute identical bits.
@@ -96,6 +96,67 @@ impl Aabb {
             2
         }
     }
+}
+
+/// The builders' box: an [`Aabb`] in SIMD lanes (the fourth lane unused), with the half
+/// surface area the SAH compares.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounds {
+    pub min: Vec3A,
+    pub max: Vec3A,
+}
+
+impl Bounds {
+    /// The empty box: growing it by any point gives that point.
+    pub const EMPTY: Bounds = Bounds {
+        min: Vec3A::splat(f32::INFINITY),
+        max: Vec3A::splat(f32::NEG_INFINITY),
+    };
+
+    /// The box `[min, max]`.
+    pub fn new(min: [f32; 3], max: [f32; 3]) -> Bounds {
+        Bounds {
+            min: Vec3A::from(min),
+            max: Vec3A::from(max),
+        }
+    }
+
+    /// The smallest box holding both.
+    #[inline]
+    pub fn union(self, o: Bounds) -> Bounds {
+        Bounds {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
+    }
+
+    /// Grows the box to hold `p`.
+    #[inline]
+    pub fn grow(&mut self, p: Vec3A) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    /// Half the surface area, negative extents counting as zero: the SAH only compares
+    /// areas, so the factor 2 is dropped.
+    #[inline]
+    pub fn half_area(&self) -> f32 {
+        let e = (self.max - self.min).max(Vec3A::ZERO);
+        e.x * e.y + e.y * e.z + e.z * e.x
+    }
+
+    /// The centre.
+    #[inline]
+    pub fn centroid(&self) -> Vec3A {
+        (self.min + self.max) * 0.5
+    }
+}
+
+/// The surface area of the box `[min, max]` in f64 (extents subtracted in f32, negative
+/// ones counting as zero), as the SAH costs of the collapsed trees sum it.
+pub fn surface_area_f64(min: Vec3, max: Vec3) -> f64 {
+    let e = (max - min).max(Vec3::ZERO).as_dvec3();
+    2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
 }
 
 #[cfg(test)]

@@ -16,6 +16,7 @@ use rayon::prelude::*;
 
 use super::{BuildOptions, Builder, Bvh, INTERSECTION_COST, TRAVERSAL_COST};
 use crate::bvh::{Bin32Node, LEAF_FLAG};
+use crate::geometry::Bounds;
 use crate::mesh::Mesh;
 
 /// Nodes with more triangles than this build their two subtrees in parallel.
@@ -25,45 +26,12 @@ const PARALLEL_BINNING: usize = 1 << 16;
 /// The most bins per axis [`BuildOptions::bins`] may ask for (a power of two).
 pub(super) const MAX_BINS: usize = 64;
 
-/// An axis-aligned box in SIMD lanes (the fourth lane unused).
-#[derive(Clone, Copy, Debug)]
-struct Bounds {
-    min: Vec3A,
-    max: Vec3A,
+/// A box as the node that holds it.
+trait NodeBox {
+    fn node(&self, left_or_first: u32, right_or_count: u32) -> Bin32Node;
 }
 
-impl Bounds {
-    const EMPTY: Bounds = Bounds {
-        min: Vec3A::splat(f32::INFINITY),
-        max: Vec3A::splat(f32::NEG_INFINITY),
-    };
-
-    #[inline]
-    fn union(self, o: Bounds) -> Bounds {
-        Bounds {
-            min: self.min.min(o.min),
-            max: self.max.max(o.max),
-        }
-    }
-
-    #[inline]
-    fn grow(&mut self, p: Vec3A) {
-        self.min = self.min.min(p);
-        self.max = self.max.max(p);
-    }
-
-    /// Half the surface area: the SAH only compares areas, so the factor 2 is dropped.
-    #[inline]
-    fn half_area(&self) -> f32 {
-        let e = (self.max - self.min).max(Vec3A::ZERO);
-        e.x * e.y + e.y * e.z + e.z * e.x
-    }
-
-    #[inline]
-    fn centroid(&self) -> Vec3A {
-        (self.min + self.max) * 0.5
-    }
-
+impl NodeBox for Bounds {
     fn node(&self, left_or_first: u32, right_or_count: u32) -> Bin32Node {
         Bin32Node {
             min: self.min.to_array(),
@@ -628,19 +596,16 @@ fn sweep_split(
         };
     for axis in 0..3 {
         sort_by_axis(&mut order, &mut keys, axis, prims.boxes);
-        let mut acc = Bounds::EMPTY;
-        for k in (1..n).rev() {
-            acc = acc.union(prims.boxes[order[k] as usize]);
-            right_area[k] = acc.half_area();
-        }
-        let mut left = Bounds::EMPTY;
-        for k in 1..n {
-            left = left.union(prims.boxes[order[k - 1] as usize]);
-            let cost = left.half_area() * k as f32 + right_area[k] * (n - k) as f32;
-            if best.is_none_or(|(c, _, _)| cost < c) {
-                best = Some((cost, axis, k));
-            }
-        }
+        sweep_costs(
+            n,
+            |k| prims.boxes[order[k] as usize],
+            right_area,
+            |cost, k| {
+                if best.is_none_or(|(c, _, _)| cost < c) {
+                    best = Some((cost, axis, k));
+                }
+            },
+        );
     }
     let (cost, axis, mid) = best.expect("n >= 2 gives a split position");
     let leaf = may_be_leaf && leaf_is_cheaper(n, bounds.half_area(), cost);
@@ -663,6 +628,31 @@ fn sweep_split(
         mid,
         left: l,
         right: r,
+    }
+}
+
+/// The SAH cost of every split position `k` (1 to `n - 1`) of the boxes in sweep order,
+/// the first `k` to the left: each handed to `keep` in order of `k`. `right_area` is
+/// scratch of at least `n` entries.
+#[inline(always)]
+fn sweep_costs(
+    n: usize,
+    box_at: impl Fn(usize) -> Bounds,
+    right_area: &mut [f32],
+    mut keep: impl FnMut(f32, usize),
+) {
+    let mut acc = Bounds::EMPTY;
+    for k in (1..n).rev() {
+        acc = acc.union(box_at(k));
+        right_area[k] = acc.half_area();
+    }
+    let mut left = Bounds::EMPTY;
+    for k in 1..n {
+        left = left.union(box_at(k - 1));
+        keep(
+            left.half_area() * k as f32 + right_area[k] * (n - k) as f32,
+            k,
+        );
     }
 }
 
@@ -716,20 +706,17 @@ fn small_sweep_split(prims: &mut Prims, bounds: Bounds, may_be_leaf: bool) -> Sp
             order[j] = i as u8;
         }
         let mut right_area = [0.0f32; SMALL];
-        let mut acc = Bounds::EMPTY;
-        for k in (1..n).rev() {
-            acc = acc.union(prims.boxes[order[k] as usize]);
-            right_area[k] = acc.half_area();
-        }
-        let mut left = Bounds::EMPTY;
-        for k in 1..n {
-            left = left.union(prims.boxes[order[k - 1] as usize]);
-            let cost = left.half_area() * k as f32 + right_area[k] * (n - k) as f32;
-            if best.is_none_or(|(c, _)| cost < c) {
-                best = Some((cost, k));
-                best_order = order;
-            }
-        }
+        sweep_costs(
+            n,
+            |k| prims.boxes[order[k] as usize],
+            &mut right_area,
+            |cost, k| {
+                if best.is_none_or(|(c, _)| cost < c) {
+                    best = Some((cost, k));
+                    best_order = order;
+                }
+            },
+        );
     }
     let (cost, mid) = best.expect("n >= 2 gives a split position");
     if may_be_leaf && leaf_is_cheaper(n, bounds.half_area(), cost) {

@@ -17,7 +17,8 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use super::Bin32Bvh;
-use crate::bvh::{INTERSECTION_COST, TRAVERSAL_COST};
+use super::SahCost;
+use crate::geometry::surface_area_f64;
 use crate::intersect::Triangle;
 
 /// Triangles a leaf child holds at most (the metadata's unary count has 3 bits).
@@ -151,8 +152,7 @@ struct Binary {
 
 impl Binary {
     fn area(&self) -> f64 {
-        let e = (self.hi - self.lo).max(Vec3::ZERO).as_dvec3();
-        2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+        surface_area_f64(self.lo, self.hi)
     }
 
     fn centre(&self) -> Vec3 {
@@ -165,13 +165,13 @@ pub fn compress(flat: &Bin32Bvh) -> Compressed {
     let tree = small_leaves(flat);
     let mut nodes = vec![CwbvhNode::default()];
     let mut triangles = Vec::with_capacity(flat.triangles.len());
-    let mut cost = 0.0;
+    let mut cost = SahCost::default();
     let mut depth = 0;
     // (binary node, its wide node's index, depth), filled depth-first.
     let mut todo = vec![(0usize, 0usize, 1u32)];
     while let Some((root, index, d)) = todo.pop() {
         depth = depth.max(d);
-        cost += TRAVERSAL_COST as f64 * tree[root].area();
+        cost.add_inner(tree[root].area());
         let children = slots(&tree, open(&tree, root), tree[root].centre());
         let mut node = CwbvhNode {
             child_base: nodes.len() as u32,
@@ -185,7 +185,7 @@ pub fn compress(flat: &Bin32Bvh) -> Compressed {
                 let offset = triangles.len() as u32 - node.triangle_base;
                 node.meta[k] = (((1u32 << n.b) - 1) << 5 | offset) as u8;
                 triangles.extend_from_slice(&flat.triangles[n.a as usize..(n.a + n.b) as usize]);
-                cost += INTERSECTION_COST as f64 * n.area() * n.b as f64;
+                cost.add_leaf(n.area(), n.b);
             } else {
                 node.meta[k] = INNER_META | k as u8;
                 node.inner_mask |= 1 << k;
@@ -206,11 +206,7 @@ pub fn compress(flat: &Bin32Bvh) -> Compressed {
         nodes,
         triangles,
         depth,
-        sah_cost: if root_area > 0.0 {
-            cost / root_area
-        } else {
-            0.0
-        },
+        sah_cost: cost.relative_to(root_area).unwrap_or(0.0),
     }
 }
 

@@ -37,6 +37,29 @@ pub const TRAVERSAL_COST: f32 = 1.0;
 /// SAH cost of one ray/triangle test.
 pub const INTERSECTION_COST: f32 = 1.0;
 
+/// The SAH cost of a tree as it is summed: each node's surface area weighted by what a
+/// visit costs, relative to the root's area (the chance a ray meeting the root meets it).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct SahCost(f64);
+
+impl SahCost {
+    /// A node visit: its children's boxes are tested.
+    pub(crate) fn add_inner(&mut self, area: f64) {
+        self.0 += TRAVERSAL_COST as f64 * area;
+    }
+
+    /// A leaf of `count` triangles, each tested.
+    pub(crate) fn add_leaf(&mut self, area: f64, count: u32) {
+        self.0 += INTERSECTION_COST as f64 * area * count as f64;
+    }
+
+    /// The cost relative to the root's area; `None` where the root has none (every
+    /// triangle in one point or line).
+    pub(crate) fn relative_to(self, root_area: f64) -> Option<f64> {
+        (root_area > 0.0).then(|| self.0 / root_area)
+    }
+}
+
 /// Which builder makes the tree.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, Deserialize)]
 #[serde(rename_all = "kebab-case")]

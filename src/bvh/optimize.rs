@@ -26,10 +26,9 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-use glam::Vec3A;
-
 use super::{Bvh, INTERSECTION_COST, MAX_DEPTH, TRAVERSAL_COST};
 use crate::bvh::{Bin32Node, LEAF_FLAG};
+use crate::geometry::Bounds;
 
 /// Rounds stop once one lowers the SAH cost by less than this fraction of it.
 pub const MIN_ROUND_GAIN: f64 = 0.0001;
@@ -79,7 +78,7 @@ impl Bvh {
             .nodes
             .iter()
             .filter(|n| n.is_leaf())
-            .map(|n| half_area(bounds_of(n)) as f64 * n.count() as f64)
+            .map(|n| Bounds::new(n.min, n.max).half_area() as f64 * n.count() as f64)
             .sum::<f64>();
         // The cost as `BvhStats` weighs it; the leaves' part is fixed, and so is the root's box.
         let root_area = tree.nodes[tree.root as usize].area as f64;
@@ -138,37 +137,6 @@ fn prefetch<T>(node: &T) {
 
 fn finite(n: &Bin32Node) -> bool {
     n.min.iter().chain(&n.max).all(|v| v.is_finite())
-}
-
-/// An axis-aligned box in SIMD lanes.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Bounds {
-    min: Vec3A,
-    max: Vec3A,
-}
-
-impl Bounds {
-    #[inline]
-    fn union(self, o: Bounds) -> Bounds {
-        Bounds {
-            min: self.min.min(o.min),
-            max: self.max.max(o.max),
-        }
-    }
-}
-
-fn bounds_of(n: &Bin32Node) -> Bounds {
-    Bounds {
-        min: Vec3A::from(n.min),
-        max: Vec3A::from(n.max),
-    }
-}
-
-/// Half the surface area (the factor 2 cancels in every comparison and in the cost ratio).
-#[inline]
-fn half_area(b: Bounds) -> f32 {
-    let e = (b.max - b.min).max(Vec3A::ZERO);
-    e.x * e.y + e.y * e.z + e.z * e.x
 }
 
 /// A node of the working tree: what the search reads of it, in one 48-byte record.
@@ -249,7 +217,7 @@ impl Tree {
             .nodes
             .iter()
             .map(|n| Node {
-                bounds: bounds_of(n),
+                bounds: Bounds::new(n.min, n.max),
                 area: 0.0,
                 height: 1,
                 child: [NONE, NONE],
@@ -269,7 +237,7 @@ impl Tree {
                 nodes[i].bounds = a.bounds.union(b.bounds);
                 nodes[i].height = 1 + a.height.max(b.height);
             }
-            nodes[i].area = half_area(nodes[i].bounds);
+            nodes[i].area = nodes[i].bounds.half_area();
         }
         Tree {
             nodes,
@@ -319,7 +287,7 @@ impl Tree {
         let changed = bounds != n.bounds || height != n.height;
         n.bounds = bounds;
         n.height = height;
-        n.area = half_area(bounds);
+        n.area = bounds.half_area();
         changed
     }
 
@@ -500,7 +468,7 @@ impl Tree {
                 break;
             }
             let y = &self.nodes[c.node as usize];
-            let grown = half_area(y.bounds.union(bx));
+            let grown = y.bounds.union(bx).half_area();
             let cost = c.induced + grown;
             if cost < best_cost && c.depth + hx.max(y.height) <= self.max_depth {
                 best_cost = cost;

@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use super::{Bvh, INTERSECTION_COST, MAX_DEPTH, TRAVERSAL_COST};
+use super::{Bvh, MAX_DEPTH, SahCost};
 use crate::bvh::Bin32Node;
 use crate::geometry::Aabb;
 use crate::mesh::Mesh;
@@ -33,16 +33,16 @@ impl BvhStats {
         let mut leaves = 0;
         let mut leaf_prims = 0u64;
         let mut max_leaf = 0;
-        let mut cost = 0.0f64;
+        let mut cost = SahCost::default();
         for n in &bvh.nodes {
             let area = node_box(n).surface_area() as f64;
             if n.is_leaf() {
                 leaves += 1;
                 leaf_prims += n.count() as u64;
                 max_leaf = max_leaf.max(n.count());
-                cost += INTERSECTION_COST as f64 * area * n.count() as f64;
+                cost.add_leaf(area, n.count());
             } else {
-                cost += TRAVERSAL_COST as f64 * area;
+                cost.add_inner(area);
             }
         }
         let root_area = node_box(&bvh.nodes[0]).surface_area() as f64;
@@ -55,11 +55,9 @@ impl BvhStats {
             max_leaf_size: max_leaf,
             // A tree whose root box has no area (all triangles in one point or line) costs
             // what its leaves cost.
-            sah_cost: if root_area > 0.0 {
-                cost / root_area
-            } else {
-                leaf_prims as f64 / leaves.max(1) as f64
-            },
+            sah_cost: cost
+                .relative_to(root_area)
+                .unwrap_or(leaf_prims as f64 / leaves.max(1) as f64),
         }
     }
 }

@@ -7,7 +7,10 @@
 //! as they are.
 
 use super::bin32::{Bin32Bvh, Bin32Node};
-use crate::bvh::{INTERSECTION_COST, TRAVERSAL_COST};
+use glam::Vec3;
+
+use super::SahCost;
+use crate::geometry::surface_area_f64;
 
 /// Marks an unused child slot in a wide node's `count`.
 pub const EMPTY_SLOT: u32 = u32::MAX;
@@ -106,17 +109,9 @@ pub(super) fn open_largest(
 /// Collapses the thesis-layout tree into nodes of up to `N::WIDTH` children.
 pub fn collapse<N: WideNode>(flat: &Bin32Bvh) -> Collapsed<N> {
     let nodes = &flat.nodes;
-    let area = |n: &Bin32Node| {
-        let e = [
-            n.max[0] - n.min[0],
-            n.max[1] - n.min[1],
-            n.max[2] - n.min[2],
-        ]
-        .map(|v| v.max(0.0) as f64);
-        2.0 * (e[0] * e[1] + e[1] * e[2] + e[2] * e[0])
-    };
+    let area = |n: &Bin32Node| surface_area_f64(Vec3::from(n.min), Vec3::from(n.max));
     let mut out: Vec<N> = Vec::new();
-    let mut cost = 0.0;
+    let mut cost = SahCost::default();
     let mut depth = 0;
     // (binary node, depth) of wide nodes still to fill, and where each is to be written.
     let mut stack = vec![(0usize, 1u32, None::<(usize, usize)>)];
@@ -128,7 +123,7 @@ pub fn collapse<N: WideNode>(flat: &Bin32Bvh) -> Collapsed<N> {
             out[p].set(slot, b, index as u32, 0);
         }
         depth = depth.max(d);
-        cost += TRAVERSAL_COST as f64 * area(&nodes[root]);
+        cost.add_inner(area(&nodes[root]));
         let mut children: Vec<usize> = if nodes[root].is_leaf() {
             vec![root]
         } else {
@@ -151,7 +146,7 @@ pub fn collapse<N: WideNode>(flat: &Bin32Bvh) -> Collapsed<N> {
             let n = &nodes[c];
             if n.is_leaf() {
                 out[index].set(slot, n, n.left_or_first, n.count());
-                cost += INTERSECTION_COST as f64 * area(n) * n.count() as f64;
+                cost.add_leaf(area(n), n.count());
             } else {
                 stack.push((c, d + 1, Some((index, slot))));
             }
@@ -161,10 +156,6 @@ pub fn collapse<N: WideNode>(flat: &Bin32Bvh) -> Collapsed<N> {
     Collapsed {
         nodes: out,
         depth,
-        sah_cost: if root_area > 0.0 {
-            cost / root_area
-        } else {
-            0.0
-        },
+        sah_cost: cost.relative_to(root_area).unwrap_or(0.0),
     }
 }
