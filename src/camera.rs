@@ -9,12 +9,12 @@ use crate::error::{Error, Result};
 use crate::geometry::{Aabb, Ray};
 
 /// Largest width or height accepted.
-pub const MAX_RESOLUTION: u32 = 16384;
+pub(crate) const MAX_RESOLUTION: u32 = 16384;
 /// Field of view of the auto framing, degrees.
-pub const AUTO_FOV: f32 = 45.0;
+pub(crate) const AUTO_FOV: f32 = 45.0;
 /// Resolution when neither the scene nor the flags give one.
-pub const DEFAULT_WIDTH: u32 = 1280;
-pub const DEFAULT_HEIGHT: u32 = 720;
+pub(crate) const DEFAULT_WIDTH: u32 = 1280;
+pub(crate) const DEFAULT_HEIGHT: u32 = 720;
 
 /// Camera settings; `None` means "not said here" (a later layer or the auto framing decides).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
@@ -31,7 +31,7 @@ pub struct CameraSettings {
 
 impl CameraSettings {
     /// Each setting from `self` where given, else from `base`.
-    pub fn over(self, base: CameraSettings) -> CameraSettings {
+    pub(crate) fn over(self, base: CameraSettings) -> CameraSettings {
         CameraSettings {
             eye: self.eye.or(base.eye),
             look_at: self.look_at.or(base.look_at),
@@ -46,11 +46,11 @@ impl CameraSettings {
 /// A pinhole camera: eye, the point it looks at, an up hint and a vertical field of view.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
-    pub eye: Vec3,
-    pub look_at: Vec3,
-    pub up: Vec3,
+    pub(crate) eye: Vec3,
+    pub(crate) look_at: Vec3,
+    pub(crate) up: Vec3,
     /// Vertical field of view in degrees, in (0, 180).
-    pub fov: f32,
+    pub(crate) fov: f32,
     pub width: u32,
     pub height: u32,
 }
@@ -99,7 +99,7 @@ impl Camera {
     }
 
     /// Refuses cameras that cannot make an image.
-    pub fn validate(&self) -> Result<()> {
+    pub(crate) fn validate(&self) -> Result<()> {
         check_resolution(&CameraSettings {
             width: Some(self.width),
             height: Some(self.height),
@@ -188,10 +188,10 @@ fn check_fov(fov: f32) -> Result<()> {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Pinhole {
-    pub eye: [f32; 4],
-    pub p0: [f32; 4],
-    pub du: [f32; 4],
-    pub dv: [f32; 4],
+    pub(crate) eye: [f32; 4],
+    pub(crate) p0: [f32; 4],
+    pub(crate) du: [f32; 4],
+    pub(crate) dv: [f32; 4],
 }
 
 impl Pinhole {

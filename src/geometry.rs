@@ -15,7 +15,7 @@ impl Ray {
         Ray { origin, dir }
     }
 
-    pub fn at(&self, t: f32) -> Vec3 {
+    pub(crate) fn at(&self, t: f32) -> Vec3 {
         self.origin + self.dir * t
     }
 }
@@ -35,7 +35,7 @@ impl Default for Aabb {
 }
 
 impl Aabb {
-    pub const EMPTY: Aabb = Aabb {
+    pub(crate) const EMPTY: Aabb = Aabb {
         min: Vec3::splat(f32::INFINITY),
         max: Vec3::splat(f32::NEG_INFINITY),
     };
@@ -44,21 +44,14 @@ impl Aabb {
         points.into_iter().fold(Self::EMPTY, |b, p| b.grown(p))
     }
 
-    pub fn grown(self, p: Vec3) -> Self {
+    pub(crate) fn grown(self, p: Vec3) -> Self {
         Aabb {
             min: self.min.min(p),
             max: self.max.max(p),
         }
     }
 
-    pub fn union(self, other: Aabb) -> Self {
-        Aabb {
-            min: self.min.min(other.min),
-            max: self.max.max(other.max),
-        }
-    }
-
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
     }
 
@@ -75,46 +68,34 @@ impl Aabb {
     }
 
     /// Surface area; zero for an empty box, so that empty bins cost nothing in the SAH.
-    pub fn surface_area(&self) -> f32 {
+    pub(crate) fn surface_area(&self) -> f32 {
         let e = self.extent();
         2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
     }
 
     /// Whether `other` lies inside this box (boundaries included).
-    pub fn contains(&self, other: &Aabb) -> bool {
+    pub(crate) fn contains(&self, other: &Aabb) -> bool {
         other.is_empty() || (self.min.cmple(other.min).all() && other.max.cmple(self.max).all())
-    }
-
-    /// Index (0, 1, 2) of the longest axis.
-    pub fn largest_axis(&self) -> usize {
-        let e = self.extent();
-        if e.x >= e.y && e.x >= e.z {
-            0
-        } else if e.y >= e.z {
-            1
-        } else {
-            2
-        }
     }
 }
 
 /// The builders' box: an [`Aabb`] in SIMD lanes (the fourth lane unused), with the half
 /// surface area the SAH compares.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Bounds {
-    pub min: Vec3A,
-    pub max: Vec3A,
+pub(crate) struct Bounds {
+    pub(crate) min: Vec3A,
+    pub(crate) max: Vec3A,
 }
 
 impl Bounds {
     /// The empty box: growing it by any point gives that point.
-    pub const EMPTY: Bounds = Bounds {
+    pub(crate) const EMPTY: Bounds = Bounds {
         min: Vec3A::splat(f32::INFINITY),
         max: Vec3A::splat(f32::NEG_INFINITY),
     };
 
     /// The box `[min, max]`.
-    pub fn new(min: [f32; 3], max: [f32; 3]) -> Bounds {
+    pub(crate) fn new(min: [f32; 3], max: [f32; 3]) -> Bounds {
         Bounds {
             min: Vec3A::from(min),
             max: Vec3A::from(max),
@@ -123,7 +104,7 @@ impl Bounds {
 
     /// The smallest box holding both.
     #[inline]
-    pub fn union(self, o: Bounds) -> Bounds {
+    pub(crate) fn union(self, o: Bounds) -> Bounds {
         Bounds {
             min: self.min.min(o.min),
             max: self.max.max(o.max),
@@ -132,7 +113,7 @@ impl Bounds {
 
     /// Grows the box to hold `p`.
     #[inline]
-    pub fn grow(&mut self, p: Vec3A) {
+    pub(crate) fn grow(&mut self, p: Vec3A) {
         self.min = self.min.min(p);
         self.max = self.max.max(p);
     }
@@ -140,21 +121,21 @@ impl Bounds {
     /// Half the surface area, negative extents counting as zero: the SAH only compares
     /// areas, so the factor 2 is dropped.
     #[inline]
-    pub fn half_area(&self) -> f32 {
+    pub(crate) fn half_area(&self) -> f32 {
         let e = (self.max - self.min).max(Vec3A::ZERO);
         e.x * e.y + e.y * e.z + e.z * e.x
     }
 
     /// The centre.
     #[inline]
-    pub fn centroid(&self) -> Vec3A {
+    pub(crate) fn centroid(&self) -> Vec3A {
         (self.min + self.max) * 0.5
     }
 }
 
 /// The surface area of the box `[min, max]` in f64 (extents subtracted in f32, negative
 /// ones counting as zero), as the SAH costs of the collapsed trees sum it.
-pub fn surface_area_f64(min: Vec3, max: Vec3) -> f64 {
+pub(crate) fn surface_area_f64(min: Vec3, max: Vec3) -> f64 {
     let e = (max - min).max(Vec3::ZERO).as_dvec3();
     2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
 }
@@ -176,7 +157,6 @@ mod tests {
     fn unit_cube_area_and_axis() {
         let b = Aabb::from_points([Vec3::ZERO, Vec3::new(1.0, 1.0, 2.0)]);
         assert_eq!(b.surface_area(), 10.0);
-        assert_eq!(b.largest_axis(), 2);
         assert!(b.contains(&Aabb::from_points([Vec3::splat(0.5)])));
         assert!(!b.contains(&Aabb::from_points([Vec3::splat(1.5)])));
     }

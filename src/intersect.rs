@@ -34,7 +34,7 @@ impl Triangle {
     /// rounding could let the watertight test "hit" three distinct collinear points, but
     /// with coinciding corners every edge function is exactly zero, and such a triangle
     /// never hits anywhere.
-    pub fn new(corners: [glam::Vec3; 3], prim: u32) -> Self {
+    pub(crate) fn new(corners: [glam::Vec3; 3], prim: u32) -> Self {
         let [a, mut b, mut c] = corners;
         if (b - a).cross(c - a) == glam::Vec3::ZERO {
             (b, c) = (a, a);
@@ -123,7 +123,13 @@ impl WatertightRay {
 
     /// The ray parameter of the hit with the triangle `(v0, v1, v2)` if it lies in
     /// `(0, t_max)`; `None` for a miss, a hit no closer than `t_max`, or a zero-area triangle.
-    pub fn intersect(&self, v0: [f32; 3], v1: [f32; 3], v2: [f32; 3], t_max: f32) -> Option<f32> {
+    pub(crate) fn intersect(
+        &self,
+        v0: [f32; 3],
+        v1: [f32; 3],
+        v2: [f32; 3],
+        t_max: f32,
+    ) -> Option<f32> {
         let o = self.org;
         let a = [v0[0] - o[0], v0[1] - o[1], v0[2] - o[2]];
         let b = [v1[0] - o[0], v1[1] - o[1], v1[2] - o[2]];
@@ -164,7 +170,7 @@ impl WatertightRay {
 /// Widens a box's exit distance so that rounding in the slab test never culls a box the
 /// ray touches: 1 + 2 gamma(3) (Ize, "Robust BVH Ray Traversal", JCGT 2013), which in f32
 /// is exactly 1 + 3 ulp.
-pub const ROBUST_EXIT: f32 = 1.0 + 3.0 * f32::EPSILON;
+pub(crate) const ROBUST_EXIT: f32 = 1.0 + 3.0 * f32::EPSILON;
 
 /// Per-ray constants of the slab test, with each slab's near and far planes picked by the
 /// sign of the direction (not by comparing distances, so that a NaN never stands in for
@@ -178,7 +184,7 @@ pub const ROBUST_EXIT: f32 = 1.0 + 3.0 * f32::EPSILON;
 /// the infinity for the far plane, an exit no earlier: both err towards visiting the box.
 /// Every other ray gets the plain inverse for both.
 #[derive(Clone, Copy, Debug)]
-pub struct RayBox {
+pub(crate) struct RayBox {
     org: [f32; 3],
     inv_near: [f32; 3],
     inv_far: [f32; 3],
@@ -186,7 +192,7 @@ pub struct RayBox {
 }
 
 impl RayBox {
-    pub fn new(ray: &Ray) -> Self {
+    pub(crate) fn new(ray: &Ray) -> Self {
         let dir = ray.dir.to_array();
         let inv_far = dir.map(|d| 1.0 / d);
         let inv_near = inv_far.map(|i| {
@@ -206,7 +212,7 @@ impl RayBox {
 
     /// The entry distance into the box `[min, max]` if the ray meets it before `t_max`.
     #[inline]
-    pub fn hit(&self, min: &[f32; 3], max: &[f32; 3], t_max: f32) -> Option<f32> {
+    pub(crate) fn hit(&self, min: &[f32; 3], max: &[f32; 3], t_max: f32) -> Option<f32> {
         let o = self.org;
         let slab = |k: usize| {
             let (near, far) = if self.negative[k] {

@@ -6,7 +6,7 @@ use bytemuck::{Pod, Zeroable};
 use crate::intersect::Triangle;
 
 /// The albedo of triangles without a material: a mid grey.
-pub const DEFAULT_ALBEDO: [f32; 3] = [0.7, 0.7, 0.7];
+pub(crate) const DEFAULT_ALBEDO: [f32; 3] = [0.7, 0.7, 0.7];
 
 /// A diffuse (Lambertian) material, as the kernels read it (`Material` in cl/cltrace.h).
 #[repr(C)]
@@ -64,7 +64,7 @@ impl Default for Materials {
 
 impl Materials {
     /// Stores each triangle's material index (looked up by its file-order index).
-    pub fn assign(&self, triangles: &mut [Triangle]) {
+    pub(crate) fn assign(&self, triangles: &mut [Triangle]) {
         for t in triangles {
             t.material = self.index_of(t.prim as usize);
         }
@@ -79,7 +79,7 @@ impl Materials {
     }
 
     /// Triangle `i`'s material index.
-    pub fn index_of(&self, triangle: usize) -> u32 {
+    pub(crate) fn index_of(&self, triangle: usize) -> u32 {
         self.per_triangle.get(triangle).copied().unwrap_or(0)
     }
 

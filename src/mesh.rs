@@ -10,7 +10,7 @@ use crate::geometry::Aabb;
 
 /// Largest coordinate magnitude accepted. The watertight intersection multiplies three
 /// coordinate differences together; with |x| <= 1e12 every such product stays finite in f32.
-pub const MAX_COORDINATE: f32 = 1e12;
+pub(crate) const MAX_COORDINATE: f32 = 1e12;
 
 /// An indexed triangle mesh. Loaders and generators guarantee (through [`Mesh::check`])
 /// that it has at least one triangle, that every index is in range and that every
@@ -105,7 +105,7 @@ impl Mesh {
 
 /// What is wrong with a vertex no renderer can use: a NaN or infinite coordinate, or one
 /// beyond [`MAX_COORDINATE`]; `None` for a good vertex. The text completes "a vertex with ...".
-pub fn coordinate_problem(p: Vec3) -> Option<String> {
+pub(crate) fn coordinate_problem(p: Vec3) -> Option<String> {
     let xyz = p.to_array();
     if p.is_nan() {
         Some(format!("a NaN coordinate {xyz:?}"))

@@ -12,7 +12,7 @@ use crate::render::Frame;
 
 /// An output image format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum OutputFormat {
+pub(crate) enum OutputFormat {
     /// 8-bit sRGB through the `image` crate (png, bmp, ppm, jpg).
     Display(ImageFormat),
     /// OpenEXR, 32-bit float linear radiance.
@@ -23,7 +23,7 @@ pub enum OutputFormat {
 
 /// The image format for `path`'s extension: png, bmp, ppm, jpg/jpeg, exr, pfm. Checked
 /// before any work starts, so that a long render never ends in "unknown format".
-pub fn image_format(path: &Path) -> Result<OutputFormat> {
+pub(crate) fn image_format(path: &Path) -> Result<OutputFormat> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
@@ -69,7 +69,7 @@ fn folder_of(path: &Path) -> &Path {
 /// Writes the frame as an image, atomically: display formats get the colours (tone-mapped
 /// radiance for the progressive modes), float formats the linear radiance (or, for the
 /// modes that shade one hit, the colours as numbers in [0, 1]).
-pub fn write_image(frame: &Frame, path: &Path) -> Result<()> {
+pub(crate) fn write_image(frame: &Frame, path: &Path) -> Result<()> {
     match image_format(path)? {
         OutputFormat::Display(format) => {
             let image = frame.to_rgb_image();
@@ -131,7 +131,7 @@ fn write_pfm(w: &mut impl Write, width: u32, pixels: &[[f32; 3]]) -> std::io::Re
 
 /// Writes the raw hit records: little-endian, row-major, 8 bytes a pixel (u32 triangle
 /// index, 0xFFFFFFFF for a miss, then f32 distance, +inf for a miss), no header.
-pub fn write_hits(frame: &Frame, path: &Path) -> Result<()> {
+pub(crate) fn write_hits(frame: &Frame, path: &Path) -> Result<()> {
     check_folder(path)?;
     write_atomically(path, |w| {
         let mut bytes = Vec::with_capacity(frame.hits.len() * 8);
@@ -145,7 +145,7 @@ pub fn write_hits(frame: &Frame, path: &Path) -> Result<()> {
 
 /// Writes through `fill` into a temporary file in `path`'s folder, then renames it to
 /// `path`. On any failure the temporary file is removed and `path` is left untouched.
-pub fn write_atomically(
+pub(crate) fn write_atomically(
     path: &Path,
     fill: impl FnOnce(&mut BufWriter<&mut std::fs::File>) -> Result<()>,
 ) -> Result<()> {

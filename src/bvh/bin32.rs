@@ -37,7 +37,7 @@ impl Bin32Node {
 
     /// The entry distance into the node's box if the ray meets it before `t_max`.
     #[inline]
-    pub fn hit(&self, ray: &RayBox, t_max: f32) -> Option<f32> {
+    pub(crate) fn hit(&self, ray: &RayBox, t_max: f32) -> Option<f32> {
         ray.hit(&self.min, &self.max, t_max)
     }
 }
@@ -46,7 +46,7 @@ impl Bin32Node {
 /// reordered into leaf order, so that a leaf's triangles are contiguous.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Bin32Bvh {
-    pub nodes: Vec<Bin32Node>,
+    pub(crate) nodes: Vec<Bin32Node>,
     pub triangles: Vec<Triangle>,
     /// Nodes on the longest root-to-leaf path; a traversal stack of `depth` entries suffices.
     pub depth: u32,
@@ -59,13 +59,6 @@ impl Bin32Bvh {
             nodes: bvh.nodes,
             depth: bvh.depth,
         }
-    }
-
-    /// Bytes the device holds per triangle (nodes and triangles together).
-    pub fn bytes_per_triangle(&self) -> f64 {
-        (self.nodes.len() * size_of::<Bin32Node>() + self.triangles.len() * size_of::<Triangle>())
-            as f64
-            / self.triangles.len() as f64
     }
 }
 

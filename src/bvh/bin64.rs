@@ -24,7 +24,7 @@ pub struct Bin64Node {
 
 /// Rebuilds a thesis-layout tree in the Aila–Laine layout, depth-first. A tree that is a
 /// single leaf gets a root whose two children are that same leaf.
-pub fn to_bvh64(flat: &Bin32Bvh) -> Vec<Bin64Node> {
+pub(crate) fn to_bvh64(flat: &Bin32Bvh) -> Vec<Bin64Node> {
     let nodes = &flat.nodes;
     let root = &nodes[0];
     if root.is_leaf() {

@@ -647,12 +647,9 @@ fn sweep_costs(
         right_area[k] = acc.half_area();
     }
     let mut left = Bounds::EMPTY;
-    for k in 1..n {
+    for (k, &right) in right_area[..n].iter().enumerate().skip(1) {
         left = left.union(box_at(k - 1));
-        keep(
-            left.half_area() * k as f32 + right_area[k] * (n - k) as f32,
-            k,
-        );
+        keep(left.half_area() * k as f32 + right * (n - k) as f32, k);
     }
 }
 

@@ -22,7 +22,7 @@ use crate::geometry::surface_area_f64;
 use crate::intersect::Triangle;
 
 /// Triangles a leaf child holds at most (the metadata's unary count has 3 bits).
-pub const MAX_LEAF_TRIANGLES: usize = 3;
+pub(crate) const MAX_LEAF_TRIANGLES: usize = 3;
 /// The low 5 bits of an inner child's metadata byte are 24 + its slot; a leaf's are the
 /// offset of its first triangle from `triangle_base`, below 24.
 const INNER_META: u8 = 0b001_11000;
@@ -54,14 +54,17 @@ pub struct CwbvhNode {
     pub hi_z: [u8; 8],
 }
 
+/// The host mirror of the kernel's box test and slot decoding, which the unit tests hold
+/// the quantization to.
+#[cfg(test)]
 impl CwbvhNode {
     /// The grid spacing on `axis`, as the kernel computes it.
-    pub fn scale(&self, axis: usize) -> f32 {
+    pub(crate) fn scale(&self, axis: usize) -> f32 {
         f32::from_bits((self.exponent[axis] as u32) << 23)
     }
 
     /// Slot `k`'s box, dequantized with the kernel's arithmetic.
-    pub fn child_box(&self, k: usize) -> (Vec3, Vec3) {
+    pub(crate) fn child_box(&self, k: usize) -> (Vec3, Vec3) {
         let deq = |axis: usize, q: u8| self.origin[axis] + q as f32 * self.scale(axis);
         (
             Vec3::new(
@@ -81,7 +84,7 @@ impl CwbvhNode {
     /// operation: plane q of an axis lies at `q * a + b` along the ray, one fused
     /// multiply-add, with the near planes moved nearer and the far ones farther by a bound
     /// on that form's rounding error. True when the ray may meet the box in `[0, t_max]`.
-    pub fn fused_box_test(&self, k: usize, org: Vec3, inv: Vec3, t_max: f32) -> bool {
+    pub(crate) fn fused_box_test(&self, k: usize, org: Vec3, inv: Vec3, t_max: f32) -> bool {
         let planes = [
             (self.lo_x[k], self.hi_x[k]),
             (self.lo_y[k], self.hi_y[k]),
@@ -105,7 +108,7 @@ impl CwbvhNode {
     }
 
     /// What slot `k` holds.
-    pub fn child(&self, k: usize) -> Child {
+    pub(crate) fn child(&self, k: usize) -> Child {
         let meta = self.meta[k];
         if meta == 0 {
             Child::Empty
@@ -122,8 +125,9 @@ impl CwbvhNode {
 }
 
 /// A slot's content.
+#[cfg(test)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Child {
+pub(crate) enum Child {
     Empty,
     Node(u32),
     Leaf { first: u32, count: u32 },
@@ -131,11 +135,11 @@ pub enum Child {
 
 /// A compressed tree: nodes (root first), triangles in the order its leaves reference them,
 /// its depth in nodes and its SAH cost (one traversal step per wide node).
-pub struct Compressed {
-    pub nodes: Vec<CwbvhNode>,
-    pub triangles: Vec<Triangle>,
-    pub depth: u32,
-    pub sah_cost: f64,
+pub(crate) struct Compressed {
+    pub(crate) nodes: Vec<CwbvhNode>,
+    pub(crate) triangles: Vec<Triangle>,
+    pub(crate) depth: u32,
+    pub(crate) sah_cost: f64,
 }
 
 /// A binary node of the tree being collapsed: the builder's nodes, with leaves of more than
@@ -161,7 +165,7 @@ impl Binary {
 }
 
 /// Rebuilds a thesis-layout tree as a compressed 8-wide tree.
-pub fn compress(flat: &Bin32Bvh) -> Compressed {
+pub(crate) fn compress(flat: &Bin32Bvh) -> Compressed {
     let tree = small_leaves(flat);
     let mut nodes = vec![CwbvhNode::default()];
     let mut triangles = Vec::with_capacity(flat.triangles.len());

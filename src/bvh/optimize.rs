@@ -31,13 +31,13 @@ use crate::bvh::{Bin32Node, LEAF_FLAG};
 use crate::geometry::Bounds;
 
 /// Rounds stop once one lowers the SAH cost by less than this fraction of it.
-pub const MIN_ROUND_GAIN: f64 = 0.0001;
+pub(crate) const MIN_ROUND_GAIN: f64 = 0.0001;
 
 /// The most rounds [`super::BuildOptions::optimize_rounds`] may ask for.
 pub const MAX_ROUNDS: u32 = 1000;
 
 /// The share of inner nodes a round tries to move (at least one).
-pub const BATCH_SHARE: f64 = 0.1;
+pub(crate) const BATCH_SHARE: f64 = 0.1;
 
 const NONE: u32 = u32::MAX;
 

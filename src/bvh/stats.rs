@@ -10,12 +10,12 @@ use crate::mesh::Mesh;
 /// Summary numbers of a BVH.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BvhStats {
-    pub triangles: usize,
-    pub nodes: usize,
-    pub leaves: usize,
-    pub depth: u32,
-    pub mean_leaf_size: f64,
-    pub max_leaf_size: u32,
+    pub(crate) triangles: usize,
+    pub(crate) nodes: usize,
+    pub(crate) leaves: usize,
+    pub(crate) depth: u32,
+    pub(crate) mean_leaf_size: f64,
+    pub(crate) max_leaf_size: u32,
     /// `(C_trav * sum over inner nodes of A(n) + C_isect * sum over leaves of A(l) * N(l)) / A(root)`,
     /// with A the surface area: the expected cost of a random ray that hits the root box.
     pub sah_cost: f64,
@@ -29,7 +29,7 @@ fn node_box(n: &Bin32Node) -> Aabb {
 }
 
 impl BvhStats {
-    pub fn of(bvh: &Bvh) -> Self {
+    pub(crate) fn of(bvh: &Bvh) -> Self {
         let mut leaves = 0;
         let mut leaf_prims = 0u64;
         let mut max_leaf = 0;

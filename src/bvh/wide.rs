@@ -13,7 +13,7 @@ use super::SahCost;
 use crate::geometry::surface_area_f64;
 
 /// Marks an unused child slot in a wide node's `count`.
-pub const EMPTY_SLOT: u32 = u32::MAX;
+pub(crate) const EMPTY_SLOT: u32 = u32::MAX;
 
 macro_rules! wide_node {
     ($name:ident, $n:literal) => {
@@ -68,7 +68,7 @@ macro_rules! wide_node {
 pub(super) use wide_node;
 
 /// What the collapse needs of a wide node type.
-pub trait WideNode: Default + Copy {
+pub(crate) trait WideNode: Default + Copy {
     const WIDTH: usize;
     /// Puts the child with box `b` in `slot`.
     fn set(&mut self, slot: usize, b: &Bin32Node, child: u32, count: u32);
@@ -77,10 +77,10 @@ pub trait WideNode: Default + Copy {
 /// A collapsed tree: nodes depth-first (root first), its depth in wide nodes, and its SAH
 /// cost under the same constants as the binary tree's (a wide node's visit costs one
 /// traversal step, whatever its width).
-pub struct Collapsed<N> {
-    pub nodes: Vec<N>,
-    pub depth: u32,
-    pub sah_cost: f64,
+pub(crate) struct Collapsed<N> {
+    pub(crate) nodes: Vec<N>,
+    pub(crate) depth: u32,
+    pub(crate) sah_cost: f64,
 }
 
 /// Fills a wide node greedily by surface area: while `children` has fewer than `width`
@@ -107,7 +107,7 @@ pub(super) fn open_largest(
 }
 
 /// Collapses the thesis-layout tree into nodes of up to `N::WIDTH` children.
-pub fn collapse<N: WideNode>(flat: &Bin32Bvh) -> Collapsed<N> {
+pub(crate) fn collapse<N: WideNode>(flat: &Bin32Bvh) -> Collapsed<N> {
     let nodes = &flat.nodes;
     let area = |n: &Bin32Node| surface_area_f64(Vec3::from(n.min), Vec3::from(n.max));
     let mut out: Vec<N> = Vec::new();

@@ -81,7 +81,7 @@ const MAX_TRIANGLES: u64 = 100_000_000;
 
 impl Generator {
     /// The default scene's mesh.
-    pub fn default_scene() -> Self {
+    pub(crate) fn default_scene() -> Self {
         Generator::Sphereflake {
             levels: default_levels(),
             subdivisions: default_subdivisions(),
@@ -168,7 +168,7 @@ impl Generator {
 
     /// The materials of the generated mesh: the sphereflake's spheres a light grey over a
     /// darker, warmer ground; every other generator grey.
-    pub fn materials(&self, mesh: &Mesh) -> Materials {
+    pub(crate) fn materials(&self, mesh: &Mesh) -> Materials {
         match *self {
             Generator::Sphereflake { ground, .. } if ground > 0 => {
                 let spheres = mesh.triangle_count() - 2 * ground as usize * ground as usize;

@@ -121,7 +121,7 @@ fn read_file(path: &Path) -> Result<Vec<u8>> {
 
 /// The most bytes a gzip-compressed mesh may expand to: far above any mesh cltrace can
 /// index, low enough that a decompression bomb is an error rather than an exhausted machine.
-pub const MAX_DECOMPRESSED_BYTES: u64 = 4 << 30;
+pub(crate) const MAX_DECOMPRESSED_BYTES: u64 = 4 << 30;
 
 /// gzip data decompressed.
 fn gunzip(path: &Path, raw: &[u8]) -> Result<Vec<u8>> {

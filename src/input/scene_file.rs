@@ -31,7 +31,7 @@ use crate::mesh::Mesh;
 use crate::render::{Method, Shade};
 
 /// The default scene, built into the binary so that `cltrace render` needs no files.
-pub const DEFAULT_SCENE: &str = include_str!("../../scenes/default.toml");
+pub(crate) const DEFAULT_SCENE: &str = include_str!("../../scenes/default.toml");
 
 /// Where the mesh comes from.
 #[derive(Clone, Debug, PartialEq)]
@@ -50,7 +50,7 @@ impl MeshSource {
 
     /// The mesh and its materials: an OBJ's from its MTL file, a generator's own, grey for
     /// the rest.
-    pub fn load_with_materials(&self) -> Result<crate::input::MeshFile> {
+    pub(crate) fn load_with_materials(&self) -> Result<crate::input::MeshFile> {
         match self {
             MeshSource::File(path) => crate::input::load_mesh_with_materials(path),
             MeshSource::Generator(g) => {
@@ -100,7 +100,7 @@ pub struct RenderSettings {
 }
 
 impl RenderSettings {
-    pub fn over(self, base: RenderSettings) -> RenderSettings {
+    pub(crate) fn over(self, base: RenderSettings) -> RenderSettings {
         RenderSettings {
             method: self.method.or(base.method),
             layout: self.layout.or(base.layout),
@@ -120,7 +120,7 @@ impl RenderSettings {
 pub struct SceneDescription {
     pub mesh: MeshSource,
     pub camera: CameraSettings,
-    pub render: RenderSettings,
+    pub(crate) render: RenderSettings,
 }
 
 #[derive(Deserialize)]
@@ -151,7 +151,7 @@ impl SceneDescription {
     }
 
     /// Reads a scene file; a mesh path in it is taken relative to the file's folder.
-    pub fn load(path: &Path) -> Result<Self> {
+    pub(crate) fn load(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path)
             .map_err(|e| Error::input(path, crate::input::io_reason(&e)))?;
         let base = path.parent().unwrap_or(Path::new(""));
@@ -159,7 +159,7 @@ impl SceneDescription {
     }
 
     /// The built-in default scene.
-    pub fn builtin_default() -> Self {
+    pub(crate) fn builtin_default() -> Self {
         Self::parse(
             DEFAULT_SCENE,
             Path::new("<built-in default scene>"),
@@ -169,7 +169,7 @@ impl SceneDescription {
     }
 
     /// A scene that is just a mesh file, with every setting left to defaults and flags.
-    pub fn from_mesh(path: &Path) -> Self {
+    pub(crate) fn from_mesh(path: &Path) -> Self {
         SceneDescription {
             mesh: MeshSource::File(path.to_path_buf()),
             camera: CameraSettings::default(),
