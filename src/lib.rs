@@ -1,37 +1,56 @@
 //! cltrace: a BVH ray tracer for any OpenCL device.
 //!
-//! The stages, one module each, in the order a render runs them:
+//! The modules, bottom layer first; each uses only those above it in this list
+//! (`tests/module_graph.rs` keeps it so):
 //!
-//! - [`input`]: meshes from OBJ/PLY files or generators, and TOML scene files;
-//! - [`mesh`]: the triangle mesh every later stage reads;
-//! - [`material`]: diffuse albedo and emission per triangle;
-//! - [`camera`]: the pinhole camera and its exact pixel-to-ray arithmetic;
-//! - [`triangle`]: the watertight ray/triangle test (mirrored in `cl/cltrace.h`);
-//! - [`bvh`]: the SAH builders, tree statistics and the host traversal;
-//! - [`layout`]: the flat device structs the kernels read;
-//! - [`device`]: OpenCL device selection, kernel compilation, pitched images;
-//! - [`render`]: the CPU reference tracers and the OpenCL renderer;
-//! - [`output`]: images and hit records, written atomically;
-//! - [`bench`]: the cross-device benchmark table;
-//! - [`tune`]: the fastest layout and work-group per device, cached;
-//! - [`commands`]: the subcommands the `cltrace` binary runs.
+//! - [`error`], [`geometry`]: the error type; rays and boxes.
+//! - [`mesh`], [`camera`]: the triangle mesh every stage reads; the pinhole camera and its
+//!   exact pixel-to-ray arithmetic.
+//! - [`intersect`]: the stored triangle, the watertight ray/triangle test and the robust
+//!   slab test (mirrored in `cl/intersect.cl`), and [`intersect::ClosestHit`], what every
+//!   host tracer answers.
+//! - [`material`], [`brute`], [`bvh`]: materials per triangle; brute force on the host;
+//!   the SAH builders and the device layouts (`bin32`, `bin64`, `wide4`, `wide8`, `cwbvh`),
+//!   each with its host traversal or box test.
+//! - [`render`], [`report`]: host shading, sampling and the path tracer's reference;
+//!   timings and verbosity.
+//! - [`input`], [`output`]: meshes, materials and scene files in; images and hit records
+//!   out, written atomically.
+//! - [`device`]: the OpenCL host side, the only module that speaks OpenCL: devices,
+//!   programs assembled from `cl/`, pitched images, the tracer.
+//! - [`renderer`]: the four methods behind one face.
+//! - [`bench`], [`tune`]: the cross-device benchmark table; the fastest layout and
+//!   work-group per device, cached.
+//! - [`commands`]: the subcommands the `cltrace` binary runs (its flags live in the
+//!   binary, `src/flags/`).
 
-pub mod bench;
-pub mod brute;
-pub mod bvh;
-pub mod camera;
-pub mod commands;
-pub mod device;
+// In layer order (see above); rustfmt keeps each group as it is.
 pub mod error;
 pub mod geometry;
-pub mod input;
-pub mod intersect;
-pub mod material;
+
+pub mod camera;
 pub mod mesh;
-pub mod output;
+
+pub mod intersect;
+
+pub mod brute;
+pub mod bvh;
+pub mod material;
+
 pub mod render;
-pub mod renderer;
 pub mod report;
+
+pub mod input;
+pub mod output;
+
+pub mod device;
+
+pub mod renderer;
+
+pub mod bench;
+
 pub mod tune;
+
+pub mod commands;
 
 pub use error::{Error, Result};
