@@ -86,7 +86,7 @@ pub struct BuildOptions {
     /// Rounds of post-build optimization by node reinsertion (0 to
     /// [`optimize::MAX_ROUNDS`]; 0, the default, is off): each moves the worst-placed
     /// inner nodes to where they cost least, lowering the SAH cost; rounds stop early once
-    /// one gains less than 0.1%.
+    /// one gains less than [`optimize::MIN_ROUND_GAIN`].
     pub optimize_rounds: u32,
 }
 
