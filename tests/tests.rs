@@ -8,6 +8,7 @@ mod bad_input_corpus;
 mod bvh;
 mod bvh_optimize;
 mod cli;
+mod commands;
 mod concurrency;
 mod fuzz_regressions;
 mod layout;
