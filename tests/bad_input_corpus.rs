@@ -4,11 +4,9 @@
 //! stderr that names the file, and leave nothing in the output folder: no image, no
 //! temporary `.cltrace-*.tmp`.
 
+use crate::common::command::cltrace;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-const BIN: &str = env!("CARGO_BIN_EXE_cltrace");
 
 /// Files whose error names another file than themselves: scene files whose mesh is at
 /// fault.
@@ -26,7 +24,7 @@ fn corpus() -> PathBuf {
 fn check(input: &Path, expected_name: &str) -> Vec<String> {
     let out = tempfile::tempdir().unwrap();
     let png = out.path().join("out.png");
-    let result = Command::new(BIN)
+    let result = cltrace()
         .arg("render")
         .arg(input)
         .arg("-o")

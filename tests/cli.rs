@@ -3,9 +3,9 @@
 
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
-const BIN: &str = env!("CARGO_BIN_EXE_cltrace");
+use crate::common::command::{run, succeeded, text};
 
 const WIDTH: u32 = 64;
 const HEIGHT: u32 = 48;
@@ -76,32 +76,13 @@ impl Work {
 /// `cltrace` with `args`, run in `cwd`, with no device chosen by the environment and no
 /// backtraces asked for (so that a panic would show its "RUST_BACKTRACE" note).
 fn cltrace<S: AsRef<OsStr>>(cwd: &Path, args: &[S]) -> Command {
-    let mut cmd = Command::new(BIN);
+    let mut cmd = crate::common::command::cltrace();
     cmd.args(args)
         .current_dir(cwd)
         .env_remove("CLTRACE_DEVICE")
         .env_remove("RUST_BACKTRACE")
         .env_remove("RUST_LIB_BACKTRACE");
     cmd
-}
-
-fn run(mut cmd: Command) -> Output {
-    cmd.output().expect("the cltrace binary runs")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
-
-#[track_caller]
-fn succeeded(out: &Output) {
-    assert!(
-        out.status.success(),
-        "cltrace failed with {:?}\nstdout: {}\nstderr: {}",
-        out.status.code(),
-        text(&out.stdout),
-        text(&out.stderr)
-    );
 }
 
 /// Render arguments for `mesh` into `output`, without a size.
@@ -170,7 +151,7 @@ fn render_png_on_the_cpu() {
 }
 
 #[test]
-fn render_other_formats() {
+fn render_writes_the_format_its_extension_names() {
     let w = Work::new();
     let quad = w.quad();
     for name in ["out.bmp", "out.ppm", "out.jpg", "out.jpeg", "OUT.PNG"] {
@@ -478,7 +459,7 @@ fn bad_options_exit_2() {
 }
 
 #[test]
-fn output_folder_that_does_not_exist() {
+fn output_folder_that_does_not_exist_exits_2() {
     // Refused before any work as a bad option (exit 2), and the folder is not created.
     let w = Work::new();
     let quad = w.quad();

@@ -3,9 +3,9 @@
 //! pixels and hits as each other.
 
 use std::path::Path;
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 
-const BIN: &str = env!("CARGO_BIN_EXE_cltrace");
+use crate::common::command::cltrace;
 const RUNS: usize = 4;
 const WIDTH: u32 = 96;
 const HEIGHT: u32 = 72;
@@ -25,7 +25,7 @@ fn four_renders_at_once_on_one_device_agree() {
     // Spawn all four before waiting for any.
     let children: Vec<_> = (0..RUNS)
         .map(|i| {
-            Command::new(BIN)
+            cltrace()
                 .arg("render")
                 .arg(&scene)
                 .arg("-o")

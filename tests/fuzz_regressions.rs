@@ -67,35 +67,35 @@ fn error_or_valid_mesh(name: &str, result: cltrace::Result<cltrace::mesh::Mesh>)
 }
 
 #[test]
-fn obj_inputs() {
+fn obj_regression_inputs_load_or_fail_cleanly() {
     run_all("obj", |name, bytes| {
         error_or_valid_mesh(name, fuzz_cases::obj(bytes))
     });
 }
 
 #[test]
-fn ply_inputs() {
+fn ply_regression_inputs_load_or_fail_cleanly() {
     run_all("ply", |name, bytes| {
         error_or_valid_mesh(name, fuzz_cases::ply(bytes))
     });
 }
 
 #[test]
-fn scene_inputs() {
+fn scene_regression_inputs_parse_without_a_panic() {
     run_all("scene", |_, bytes| {
         let _ = fuzz_cases::scene(bytes);
     });
 }
 
 #[test]
-fn bvh_inputs() {
+fn bvh_regression_inputs_build_and_trace_like_brute_force() {
     run_all("bvh", |_, bytes| {
         fuzz_cases::bvh(bytes);
     });
 }
 
 #[test]
-fn bvh_raw_inputs() {
+fn bvh_raw_regression_inputs_build_and_trace_without_a_panic() {
     run_all("bvh_raw", |_, bytes| {
         fuzz_cases::bvh_raw(bytes);
     });
@@ -113,7 +113,7 @@ fn there_are_regression_inputs() {
 /// Every BVH input crashed after the mesh check, in the build or the traversal: each must
 /// still get that far, or it no longer tests anything.
 #[test]
-fn bvh_inputs_pass_the_mesh_check() {
+fn bvh_regression_inputs_still_pass_the_mesh_check() {
     for (name, bytes) in inputs("bvh") {
         assert!(
             fuzz_cases::bvh(&bytes),
@@ -135,25 +135,21 @@ fn lines_split_at_unicode_whitespace_as_tobj_splits_them() {
 }
 
 /// The OpenCL kernels on the BVH regression soups (rays along box planes, subnormal
-/// direction components, hits one ulp before `t_max`, slivers): for every node layout,
-/// each ray hits what brute force on the host hits, under the rules of the `bvh` target
-/// (the same triangle at the same distance, or a tie within rounding that the kernel's
-/// triangle really makes; a miss only where brute force hits at the very end of the ray
-/// or outside the triangle's own box).
+/// direction components, hits one ulp before `t_max`, slivers): for every OpenCL tracer
+/// (the brute-force kernels and each layout's BVH kernels), each ray hits what brute force
+/// on the host hits, under the rules of the `bvh` target (the same triangle at the same
+/// distance, or a tie within rounding that the kernel's triangle really makes; a miss only
+/// where brute force hits at the very end of the ray or outside the triangle's own box).
 #[test]
 fn bvh_regressions_trace_alike_on_the_opencl_device() {
+    use crate::common::tracers::{DeviceTracer, in_file_order};
     use cltrace::brute::BruteForce;
-    use cltrace::bvh::{Bin32Bvh, DeviceLayout, Layout};
-    use cltrace::bvh::{BuildOptions, Bvh};
-    use cltrace::device::tracer::ClTracer;
-    use cltrace::device::{ClDevice, DeviceSelector};
+    use cltrace::bvh::BuildOptions;
     use cltrace::intersect::ClosestHit;
     use cltrace::intersect::WatertightRay;
-    use cltrace::intersect::triangles_in_order;
     use fuzz_cases::{TIE, box_entry, decode_soup};
 
-    let selector = DeviceSelector::from_flag_or_env(None).expect("valid CLTRACE_DEVICE");
-    let device = ClDevice::select(&selector).expect("an OpenCL device");
+    let device = crate::common::device();
     let mut traced = 0;
     for (name, bytes) in inputs("bvh") {
         let soup = decode_soup(&bytes, true);
@@ -161,20 +157,13 @@ fn bvh_regressions_trace_alike_on_the_opencl_device() {
         if mesh.check(std::path::Path::new(&name)).is_err() {
             continue;
         }
-        let n = mesh.triangle_count();
         let brute = BruteForce {
-            triangles: triangles_in_order(mesh, 0..n as u32),
+            triangles: in_file_order(mesh),
         };
-        let bvh = Bvh::build(mesh, &BuildOptions::default());
-        let sah = bvh.stats().sah_cost;
-        let flat = Bin32Bvh::new(bvh, mesh);
-        for layout in Layout::ALL {
-            let laid = DeviceLayout::new(flat.clone(), layout, sah);
-            let program =
-                ClTracer::compile(&device, Some((layout, laid.stack_size)), false).unwrap();
-            let mut tracer = ClTracer::with_layout(&device, &program, &laid).unwrap();
+        for tracer in DeviceTracer::all() {
+            let mut cl = tracer.prepare(&device, mesh, &BuildOptions::default());
             for (k, (ray, t_max)) in soup.rays.iter().enumerate() {
-                let hit = tracer
+                let hit = cl
                     .trace_rays(std::slice::from_ref(ray), *t_max, false)
                     .unwrap()[0];
                 let got = (!hit.is_miss()).then_some((hit.prim, hit.t));
@@ -201,8 +190,9 @@ fn bvh_regressions_trace_alike_on_the_opencl_device() {
                 };
                 assert!(
                     ok,
-                    "{name}, {layout:?}, ray {k} {ray:?} (t_max {t_max}): brute force \
-                     {expected:?}, the kernel {got:?}"
+                    "{name}, {}, ray {k} {ray:?} (t_max {t_max}): brute force \
+                     {expected:?}, the kernel {got:?}",
+                    tracer.name()
                 );
                 traced += 1;
             }

@@ -1,7 +1,7 @@
 //! The structs shared with the kernels have the same size and field offsets on the host
 //! and on the device: `probe.cl` reports the device compiler's layout.
 
-mod common;
+use crate::common;
 
 use std::mem::{offset_of, size_of};
 

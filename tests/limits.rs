@@ -2,10 +2,10 @@
 //! once is rendered band by band and comes out the same; a scene larger than the device is
 //! refused before upload, naming both of the device's numbers.
 
-mod common;
-
 use std::sync::atomic::AtomicBool;
 
+use crate::common::command::{cltrace, text};
+use crate::common::*;
 use cltrace::bvh::Bin32Bvh;
 use cltrace::bvh::{BuildOptions, Bvh};
 use cltrace::camera::Camera;
@@ -13,7 +13,6 @@ use cltrace::device::tracer::ClTracer;
 use cltrace::input::generate::Generator;
 use cltrace::render::integrator::{Accumulation, Lighting, SampleSettings};
 use cltrace::render::{Shade, ShadeParams};
-use common::*;
 
 #[test]
 fn images_larger_than_one_allocation_are_rendered_in_bands() {
@@ -99,11 +98,10 @@ fn a_scene_larger_than_the_device_is_refused_before_upload() {
 /// `--fallback cpu` the render happens on the host and says so.
 #[test]
 fn fallback_to_the_cpu_only_when_asked() {
-    let bin = env!("CARGO_BIN_EXE_cltrace");
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("f.png");
     let run = |extra: &[&str]| {
-        std::process::Command::new(bin)
+        cltrace()
             .args([
                 "render", "--device", "9:9", "--width", "16", "--height", "12", "-o",
             ])
@@ -116,7 +114,7 @@ fn fallback_to_the_cpu_only_when_asked() {
     assert_eq!(failed.status.code(), Some(1));
     assert!(!out.exists());
     let fell_back = run(&["--fallback", "cpu"]);
-    let stderr = String::from_utf8_lossy(&fell_back.stderr);
+    let stderr = text(&fell_back.stderr);
     assert!(fell_back.status.success(), "{stderr}");
     assert!(
         stderr.contains("rendering with cpu-bvh instead"),

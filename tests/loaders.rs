@@ -541,7 +541,7 @@ fn ply_vertex_index_spelling_is_accepted() {
 const TRIANGLE: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
 
 #[test]
-fn missing_file_and_directory() {
+fn missing_files_and_directories_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let msg = refused(&dir.path().join("nothing-here.obj"));
     assert!(msg.contains("no such file"), "{msg}");
@@ -555,7 +555,7 @@ fn missing_file_and_directory() {
 }
 
 #[test]
-fn unknown_extensions() {
+fn unknown_extensions_are_refused() {
     let msg = refused_bytes("model.stl", "solid x\nendsolid x\n");
     assert!(msg.contains(".obj"), "{msg}");
     refused_bytes("model.gz", gzip(TRIANGLE.as_bytes()));
@@ -564,7 +564,7 @@ fn unknown_extensions() {
 }
 
 #[test]
-fn empty_files_and_files_without_triangles() {
+fn empty_files_and_files_without_triangles_are_refused() {
     for name in ["empty.obj", "empty.ply", "empty.obj.gz", "empty.ply.gz"] {
         refused_bytes(name, "");
     }
@@ -674,7 +674,7 @@ fn bad_vertices_that_no_triangle_uses_are_harmless() {
 }
 
 #[test]
-fn not_text() {
+fn files_that_are_not_utf8_text_are_refused() {
     // invalid UTF-8 on line 2
     refused_at("latin1.obj", b"v 0 0 0\nv 1 \xe9 0\nv 0 1 0\nf 1 2 3\n", 2);
     // UTF-16 with a byte order mark
@@ -702,7 +702,7 @@ fn not_text() {
 }
 
 #[test]
-fn bad_gzip() {
+fn truncated_and_fake_gzip_files_are_refused() {
     let whole = gzip(POLYGONS.repeat(50).as_bytes());
     let msg = refused_bytes("cut.obj.gz", &whole[..whole.len() / 2]);
     assert!(msg.contains("gzip"), "{msg}");
@@ -963,11 +963,9 @@ fn obj_without_its_mtl_file_is_grey_with_a_warning() {
 /// The Cornell box lights itself: its light is an emitter, its walls are not.
 #[test]
 fn cornell_box_has_its_light() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes/cornell_box.obj");
-    if !path.exists() {
-        eprintln!("skipped: {} is absent", path.display());
+    let Some(path) = crate::common::shared_scene("cornell_box.obj") else {
         return;
-    }
+    };
     let file = load_mesh_with_materials(&path).unwrap();
     assert_eq!(file.warning, None);
     let emitting = (0..file.mesh.triangle_count())

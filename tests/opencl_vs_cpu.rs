@@ -1,21 +1,27 @@
 //! The OpenCL kernels (brute force and BVH) against the CPU brute-force reference: the same
 //! triangle on every pixel, differing only by ties, on generated scenes seen from outside,
-//! inside and at grazing angles, and on the shared real meshes when they are present.
+//! inside and at grazing angles, and on the shared real meshes when they are present. The
+//! checks are generic: [`host_frames_match`] over implementations of `ClosestHit`,
+//! [`device_frames_match`] over the OpenCL tracers (`DeviceTracer`), and the ray-buffer
+//! tests ask every tracer on both sides the same rays.
 
-mod common;
-
+use crate::common::tracers::{DeviceTracer, Ties, check_device, check_host, in_file_order};
+use crate::common::*;
 use cltrace::bvh::Bin32Bvh;
+use cltrace::bvh::Layout;
 use cltrace::bvh::{BuildOptions, Builder, Bvh};
 use cltrace::camera::Camera;
 use cltrace::camera::CameraSettings;
 use cltrace::device::ClDevice;
 use cltrace::device::tracer::ClTracer;
+use cltrace::geometry::Ray;
 use cltrace::input::generate::Generator;
 use cltrace::input::load_mesh;
+use cltrace::intersect::ClosestHit;
 use cltrace::intersect::triangles_in_order;
 use cltrace::mesh::Mesh;
 use cltrace::render::{Frame, Shade, ShadeParams, cpu};
-use common::*;
+use glam::Vec3;
 
 struct Case {
     name: String,
@@ -124,38 +130,24 @@ fn reference(c: &Case) -> Frame {
     )
 }
 
-fn cl_brute(device: &ClDevice, c: &Case) -> Frame {
-    let program = ClTracer::compile_brute(device).unwrap();
-    let tris = triangles_in_order(&c.mesh, 0..c.mesh.triangle_count() as u32);
-    let mut tracer = ClTracer::brute(device, &program, &tris).unwrap();
+/// `tracer`'s frame of the case, Lambert-shaded, with its BVH built with `options`.
+fn device_frame(
+    device: &ClDevice,
+    tracer: DeviceTracer,
+    c: &Case,
+    options: &BuildOptions,
+) -> Frame {
+    let mut cl = tracer.prepare(device, &c.mesh, options);
     let shade = ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds());
-    tracer
-        .render(
-            &c.camera.pinhole(),
-            c.camera.width,
-            c.camera.height,
-            &shade,
-            false,
-        )
-        .unwrap()
-        .0
-}
-
-fn cl_bvh(device: &ClDevice, c: &Case, options: &BuildOptions) -> Frame {
-    let bvh = Bin32Bvh::new(Bvh::build(&c.mesh, options), &c.mesh);
-    let program = ClTracer::compile_bvh(device, bvh.depth).unwrap();
-    let mut tracer = ClTracer::bvh(device, &program, &bvh).unwrap();
-    let shade = ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds());
-    tracer
-        .render(
-            &c.camera.pinhole(),
-            c.camera.width,
-            c.camera.height,
-            &shade,
-            false,
-        )
-        .unwrap()
-        .0
+    cl.render(
+        &c.camera.pinhole(),
+        c.camera.width,
+        c.camera.height,
+        &shade,
+        false,
+    )
+    .unwrap()
+    .0
 }
 
 fn check(c: &Case, what: &str, reference: &Frame, frame: &Frame) {
@@ -166,8 +158,27 @@ fn check(c: &Case, what: &str, reference: &Frame, frame: &Frame) {
     }
 }
 
-#[test]
-fn opencl_brute_force_matches_the_cpu_reference() {
+/// The host tracer `make` builds (any implementation of `ClosestHit`) renders every case
+/// like the reference.
+fn host_frames_match<T: ClosestHit>(what: &str, make: impl Fn(&Mesh) -> T) {
+    for c in cases() {
+        let reference = reference(&c);
+        let shade = ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds());
+        let frame = cpu::render(
+            &make(&c.mesh),
+            &c.camera.pinhole(),
+            c.camera.width,
+            c.camera.height,
+            &shade,
+            None,
+        );
+        check(&c, what, &reference, &frame);
+    }
+}
+
+/// Each of `tracers`, its BVH built with each of `builds`, renders every case like the
+/// reference (which must see something).
+fn device_frames_match(tracers: &[DeviceTracer], builds: &[(&str, BuildOptions)]) {
     let device = device();
     for c in cases() {
         let reference = reference(&c);
@@ -176,13 +187,34 @@ fn opencl_brute_force_matches_the_cpu_reference() {
             "{}: the camera sees nothing",
             c.name
         );
-        check(&c, "cl-brute", &reference, &cl_brute(&device, &c));
+        for &tracer in tracers {
+            for (build, options) in builds {
+                let frame = device_frame(&device, tracer, &c, options);
+                check(
+                    &c,
+                    &format!("{} ({build})", tracer.name()),
+                    &reference,
+                    &frame,
+                );
+                if tracer == DeviceTracer::Brute {
+                    break; // no tree to build
+                }
+            }
+        }
     }
+}
+
+fn default_build() -> (&'static str, BuildOptions) {
+    ("binned", BuildOptions::default())
+}
+
+#[test]
+fn opencl_brute_force_matches_the_cpu_reference() {
+    device_frames_match(&[DeviceTracer::Brute], &[default_build()]);
 }
 
 #[test]
 fn opencl_bvh_matches_the_cpu_reference() {
-    let device = device();
     let sweep = BuildOptions {
         builder: Builder::Sweep,
         ..Default::default()
@@ -192,78 +224,27 @@ fn opencl_bvh_matches_the_cpu_reference() {
         bins: 16,
         ..Default::default()
     };
-    for c in cases() {
-        let reference = reference(&c);
-        check(
-            &c,
-            "cl-bvh (binned)",
-            &reference,
-            &cl_bvh(&device, &c, &BuildOptions::default()),
-        );
-        check(
-            &c,
-            "cl-bvh (sweep, leaves of one)",
-            &reference,
-            &cl_bvh(&device, &c, &sweep),
-        );
-        check(
-            &c,
-            "cl-bvh (16 bins, leaves of one)",
-            &reference,
-            &cl_bvh(&device, &c, &one_per_leaf),
-        );
-    }
+    device_frames_match(
+        &[DeviceTracer::Bvh(Layout::Bin32)],
+        &[
+            default_build(),
+            ("sweep, leaves of one", sweep),
+            ("16 bins, leaves of one", one_per_leaf),
+        ],
+    );
 }
 
 #[test]
 fn every_layout_matches_the_cpu_reference() {
-    use cltrace::bvh::{DeviceLayout, Layout};
-    let device = device();
-    for c in cases() {
-        let reference = reference(&c);
-        let bvh = Bvh::build(&c.mesh, &BuildOptions::default());
-        let sah = bvh.stats().sah_cost;
-        let flat = Bin32Bvh::new(bvh, &c.mesh);
-        for layout in Layout::ALL {
-            let laid = DeviceLayout::new(flat.clone(), layout, sah);
-            let program =
-                ClTracer::compile(&device, Some((layout, laid.stack_size)), false).unwrap();
-            let mut tracer = ClTracer::with_layout(&device, &program, &laid).unwrap();
-            let shade = ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds());
-            let (frame, _) = tracer
-                .render(
-                    &c.camera.pinhole(),
-                    c.camera.width,
-                    c.camera.height,
-                    &shade,
-                    false,
-                )
-                .unwrap();
-            check(
-                &c,
-                &format!("cl-bvh ({})", layout.name()),
-                &reference,
-                &frame,
-            );
-        }
-    }
+    device_frames_match(&DeviceTracer::layouts(), &[default_build()]);
 }
 
 #[test]
 fn cpu_bvh_matches_the_cpu_reference() {
-    for c in cases() {
-        let reference = reference(&c);
-        let bvh = Bin32Bvh::new(Bvh::build(&c.mesh, &BuildOptions::default()), &c.mesh);
-        let shade = ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds());
-        let frame = cpu::render(
-            &bvh,
-            &c.camera.pinhole(),
-            c.camera.width,
-            c.camera.height,
-            &shade,
-            None,
-        );
-        check(&c, "cpu-bvh", &reference, &frame);
+    for opts in all_options() {
+        host_frames_match(&format!("cpu-bvh ({opts:?})"), |mesh| {
+            Bin32Bvh::new(Bvh::build(mesh, &opts), mesh)
+        });
     }
 }
 
@@ -308,7 +289,8 @@ fn pixels_and_colours_agree_between_kernels_and_host() {
     }
 }
 
-/// The real meshes, when present: the BVH kernel against the CPU brute force.
+/// The real meshes, when present: the BVH kernels of every layout against the CPU brute
+/// force.
 #[test]
 fn opencl_bvh_matches_on_the_bunny_and_the_teapot() {
     let device = device();
@@ -323,12 +305,10 @@ fn opencl_bvh_matches_on_the_bunny_and_the_teapot() {
             mesh,
         };
         let reference = reference(&c);
-        check(
-            &c,
-            "cl-bvh",
-            &reference,
-            &cl_bvh(&device, &c, &BuildOptions::default()),
-        );
+        for tracer in DeviceTracer::layouts() {
+            let frame = device_frame(&device, tracer, &c, &BuildOptions::default());
+            check(&c, &tracer.name(), &reference, &frame);
+        }
     }
 }
 
@@ -369,22 +349,17 @@ fn stack_overflow_is_an_error_not_an_image() {
     );
 }
 
-/// Arbitrary rays from a buffer, closest and any hit, brute force and BVH, against the host.
+/// Arbitrary rays from a buffer, closest and any hit, ending at `t_max`: every tracer on
+/// the host and on the device against brute force on the host (the same triangle, no ties
+/// in a random soup).
 #[test]
 fn ray_buffers_match_the_host_for_closest_and_any_hits() {
-    use cltrace::geometry::Ray;
-    use cltrace::intersect::ClosestHit;
-    use glam::Vec3;
-
     let device = device();
     let mesh = generate(Generator::Soup {
         triangles: 3000,
         seed: 5,
     });
-    let brute = cltrace::brute::BruteForce {
-        triangles: triangles_in_order(&mesh, 0..mesh.triangle_count() as u32),
-    };
-    let flat = Bin32Bvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
+    let triangles = in_file_order(&mesh);
     let mut state = 12345u32;
     let mut unit = move || {
         state = state.wrapping_mul(1664525).wrapping_add(1013904223);
@@ -397,60 +372,27 @@ fn ray_buffers_match_the_host_for_closest_and_any_hits() {
             Ray::new(o, if d.length() > 1e-3 { d } else { Vec3::X })
         })
         .collect();
-    let t_max = 0.7;
-    let mut bvh_tracer = ClTracer::bvh(
-        &device,
-        &ClTracer::compile_bvh(&device, flat.depth).unwrap(),
-        &flat,
-    )
-    .unwrap();
-    let mut brute_tracer = ClTracer::brute(
-        &device,
-        &ClTracer::compile_brute(&device).unwrap(),
-        &brute.triangles,
-    )
-    .unwrap();
-    for any_hit in [false, true] {
-        let from_bvh = bvh_tracer.trace_rays(&rays, t_max, any_hit).unwrap();
-        let from_brute = brute_tracer.trace_rays(&rays, t_max, any_hit).unwrap();
-        let mut hits = 0;
-        for (i, ray) in rays.iter().enumerate() {
-            let expected = brute.trace(ray, t_max, false);
-            for (what, got) in [("cl-bvh", from_bvh[i]), ("cl-brute", from_brute[i])] {
-                match expected {
-                    None => assert!(
-                        got.is_miss(),
-                        "{what}, any_hit {any_hit}, ray {i}: hit {got:?} where the host sees nothing"
-                    ),
-                    Some((prim, t)) if !any_hit => {
-                        let distance = t * ray.dir.length();
-                        assert_eq!(got.prim, prim as u32, "{what}, ray {i}");
-                        assert!(
-                            (got.t - distance).abs() <= 1e-5 * distance,
-                            "{what}, ray {i}: {} vs {distance}",
-                            got.t
-                        );
-                    }
-                    Some(_) => {
-                        // Any hit will do, as long as it is a real one before t_max.
-                        let tri = &brute.triangles[got.prim as usize];
-                        let t = hit_distance(ray, tri).unwrap_or_else(|| {
-                            panic!("{what}, ray {i}: reported triangle {} is not hit", got.prim)
-                        });
-                        assert!(
-                            t <= t_max * ray.dir.length() * (1.0 + 1e-5),
-                            "{what}, ray {i}: hit beyond t_max"
-                        );
-                    }
-                }
-            }
-            hits += expected.is_some() as usize;
-            assert_eq!(
-                flat.occluded(ray, t_max),
-                expected.is_some(),
-                "host BVH any-hit, ray {i}"
-            );
-        }
+    let question = (0.7, Ties::None);
+    let brute = cltrace::brute::BruteForce {
+        triangles: triangles.clone(),
+    };
+    let flat = Bin32Bvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
+    let mut results = vec![
+        check_host("cpu-brute", &brute, &rays, question, &triangles),
+        check_host("cpu-bvh", &flat, &rays, question, &triangles),
+    ];
+    for tracer in DeviceTracer::all() {
+        let mut cl = tracer.prepare(&device, &mesh, &BuildOptions::default());
+        results.push(check_device(
+            &tracer.name(),
+            &mut cl,
+            &rays,
+            question,
+            &triangles,
+        ));
+    }
+    for hits in results {
+        let hits = hits.unwrap_or_else(|e| panic!("{e}"));
         assert!(
             hits > 200 && hits < 3800,
             "the rays should both hit and miss ({hits} hits)"
@@ -459,20 +401,13 @@ fn ray_buffers_match_the_host_for_closest_and_any_hits() {
 }
 
 /// Rays lying in the planes of the boxes' faces (a direction component exactly zero, the
-/// origin on a face's plane) are inside those slabs: every layout's kernel must find what
-/// brute force finds, here the edges of nested boxes grazed along their faces.
+/// origin on a face's plane) are inside those slabs: every tracer must find what brute
+/// force finds, here the edges of nested boxes grazed along their faces.
 #[test]
 fn rays_along_box_faces_match_brute_force() {
-    use cltrace::bvh::{DeviceLayout, Layout};
-    use cltrace::geometry::Ray;
-    use cltrace::intersect::ClosestHit;
-    use glam::Vec3;
-
     let device = device();
     let mesh = generate(Generator::NestedBoxes { count: 3 });
-    let brute = cltrace::brute::BruteForce {
-        triangles: triangles_in_order(&mesh, 0..mesh.triangle_count() as u32),
-    };
+    let triangles = in_file_order(&mesh);
     // Every vertex coordinate value, so rays run exactly in the planes of the boxes' faces.
     let mut planes: Vec<f32> = mesh.positions.iter().flat_map(|p| p.to_array()).collect();
     planes.sort_by(f32::total_cmp);
@@ -493,48 +428,22 @@ fn rays_along_box_faces_match_brute_force() {
             }
         }
     }
-    let bvh = Bvh::build(&mesh, &BuildOptions::default());
-    let sah = bvh.stats().sah_cost;
-    let flat = Bin32Bvh::new(bvh, &mesh);
-    let mut hits = 0;
-    for layout in Layout::ALL {
-        let laid = DeviceLayout::new(flat.clone(), layout, sah);
-        let program = ClTracer::compile(&device, Some((layout, laid.stack_size)), false).unwrap();
-        let got = ClTracer::with_layout(&device, &program, &laid)
-            .unwrap()
-            .trace_rays(&rays, f32::INFINITY, false)
-            .unwrap();
-        hits = 0;
-        for (i, ray) in rays.iter().enumerate() {
-            let expected = brute
-                .closest_hit(ray, f32::INFINITY)
-                .map(|(p, t)| (p as u32, t * ray.dir.length()));
-            let host = flat
-                .closest_hit(ray, f32::INFINITY)
-                .map(|(j, t)| (flat.triangles[j].prim, t * ray.dir.length()));
-            let got = (!got[i].is_miss()).then_some((got[i].prim, got[i].t));
-            // The same triangle, or a tie: another triangle really hit at the same distance.
-            let agrees = |a: Option<(u32, f32)>| match (a, expected) {
-                (None, None) => true,
-                (Some((p, t)), Some((q, u))) => {
-                    p == q && t == u
-                        || (t - u).abs() <= TIE * u
-                            && hit_distance(ray, &brute.triangles[p as usize])
-                                .is_some_and(|h| (h - u).abs() <= TIE * u)
-                }
-                _ => false,
-            };
-            assert!(
-                agrees(got),
-                "{}: ray {i} {ray:?}: brute force {expected:?}, kernel {got:?}",
-                layout.name()
-            );
-            assert!(
-                agrees(host),
-                "host BVH: ray {i} {ray:?}: brute force {expected:?}, host {host:?}"
-            );
-            hits += expected.is_some() as usize;
-        }
+    // The same triangle, or a tie: another triangle really hit at the same distance.
+    let question = (f32::INFINITY, Ties::Allowed);
+    let flat = Bin32Bvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
+    let mut results = vec![check_host("cpu-bvh", &flat, &rays, question, &triangles)];
+    for tracer in DeviceTracer::all() {
+        let mut cl = tracer.prepare(&device, &mesh, &BuildOptions::default());
+        results.push(check_device(
+            &tracer.name(),
+            &mut cl,
+            &rays,
+            question,
+            &triangles,
+        ));
     }
-    assert!(hits > rays.len() / 4, "{hits} of {} rays hit", rays.len());
+    for hits in results {
+        let hits = hits.unwrap_or_else(|e| panic!("{e}"));
+        assert!(hits > rays.len() / 4, "{hits} of {} rays hit", rays.len());
+    }
 }

@@ -2,10 +2,10 @@
 //! the white furnace for the path tracer, the OpenCL path tracer against the host's, the
 //! same seed giving the same bytes, and Ctrl-C writing what has accumulated.
 
-mod common;
-
 use std::sync::atomic::AtomicBool;
 
+use crate::common::command::cltrace;
+use crate::common::*;
 use cltrace::bvh::BuildOptions;
 use cltrace::bvh::Layout;
 use cltrace::camera::Camera;
@@ -18,7 +18,6 @@ use cltrace::render::Method;
 use cltrace::render::integrator::{Accumulation, Lighting, SampleSettings};
 use cltrace::renderer::{PrepareOptions, Renderer};
 use cltrace::report::Timings;
-use common::*;
 use glam::Vec3;
 
 fn camera(mesh: &Mesh, eye: [f32; 3], look_at: [f32; 3], fov: f32, size: (u32, u32)) -> Camera {
@@ -182,7 +181,7 @@ fn ambient_occlusion_is_zero_inside_a_closed_box() {
 
 /// A closed sphere seen from inside, albedo a and emission E everywhere: radiance E / (1 - a).
 #[test]
-fn white_furnace() {
+fn white_furnace_radiance_is_emission_over_one_minus_albedo() {
     let device = device();
     let sphere = generate(Generator::Sphere { subdivisions: 2 });
     let (albedo, emission) = (0.6f32, 0.5f32);
@@ -388,14 +387,12 @@ fn the_same_seed_gives_the_same_bytes() {
     assert_eq!(a.rays, b.rays);
 }
 
-const BIN: &str = env!("CARGO_BIN_EXE_cltrace");
-
 /// Ctrl-C during a long progressive render stops sampling and writes what accumulated.
 #[test]
 fn ctrl_c_writes_what_has_accumulated() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("partial.pfm");
-    let child = std::process::Command::new(BIN)
+    let child = cltrace()
         .args([
             "render", "--shade", "path", "--spp", "65536", "--width", "64", "--height", "48",
             "--method", "cl-bvh",
@@ -449,7 +446,7 @@ fn bad_sampling_options_exit_2() {
         vec!["--shade", "path", "--max-bounces", "5000"],
     ] {
         let dir = tempfile::tempdir().unwrap();
-        let out = std::process::Command::new(BIN)
+        let out = cltrace()
             .args([
                 "render", "--width", "8", "--height", "8", "--method", "cpu-bvh",
             ])

@@ -6,12 +6,10 @@
 //! passes through the closed surface at that point, so it must hit something no farther
 //! than the point: a miss means it slipped between two triangles. (Rays that only touch
 //! the surface there, at a silhouette, are left out, unless they meet the seam exactly:
-//! see `Seam::crossed_by`.) Checked on the CPU
-//! (brute force and BVH) and on the OpenCL device (brute-force and BVH kernels); and, so
-//! that the test can fail, a Möller–Trumbore test with strict inequalities must let some of
-//! the same rays through.
-
-mod common;
+//! see `Seam::crossed_by`.) Checked on every tracer: on the CPU each implementation of
+//! `ClosestHit` (brute force and BVH), on the OpenCL device the brute-force kernels and the
+//! BVH kernels of every layout; and, so that the test can fail, a Möller–Trumbore test with
+//! strict inequalities must let some of the same rays through.
 
 use std::collections::HashMap;
 
@@ -28,6 +26,9 @@ use cltrace::intersect::{Triangle, triangles_in_order};
 use cltrace::mesh::Mesh;
 use glam::Vec3;
 use rayon::prelude::*;
+
+use crate::common;
+use crate::common::tracers::DeviceTracer;
 
 /// Every ray reaches its surface point at t = 1. A hit up to this far counts: the point is
 /// rounded onto its edge, and the ray onto the point.
@@ -306,7 +307,7 @@ const GENEROUS: Aim = Aim {
 };
 
 fn cases() -> Vec<Case> {
-    let generate = |g: Generator| g.generate().unwrap();
+    let generate = common::generate;
     let mut cases = vec![
         case(
             "sphere",
@@ -337,8 +338,9 @@ fn cases() -> Vec<Case> {
     cases
 }
 
-/// Rays that reported no hit up to the surface point.
-fn cpu_misses(tracer: &impl ClosestHit, rays: &[Ray]) -> (usize, usize) {
+/// Rays that reported no hit up to the surface point (closest hit, any hit), for any
+/// implementation of `ClosestHit`.
+fn cpu_misses<T: ClosestHit>(tracer: &T, rays: &[Ray]) -> (usize, usize) {
     rays.par_iter()
         .map(|ray| {
             (
@@ -349,6 +351,7 @@ fn cpu_misses(tracer: &impl ClosestHit, rays: &[Ray]) -> (usize, usize) {
         .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
 }
 
+/// The same for an OpenCL tracer.
 fn device_misses(tracer: &mut ClTracer, rays: &[Ray]) -> (usize, usize) {
     let mut count = |any_hit| {
         let hits = tracer.trace_rays(rays, T_MAX, any_hit).unwrap();
@@ -386,7 +389,6 @@ fn strict_moller_trumbore(ray: &Ray, tri: &Triangle, t_max: f32) -> bool {
 #[test]
 fn rays_through_seams_never_slip_between_triangles() {
     let device: ClDevice = common::device();
-    let brute_program = ClTracer::compile_brute(&device).unwrap();
     let mut failures = Vec::new();
     for c in cases() {
         let n = c.mesh.triangle_count() as u32;
@@ -394,16 +396,14 @@ fn rays_through_seams_never_slip_between_triangles() {
             triangles: triangles_in_order(&c.mesh, 0..n),
         };
         let flat = Bin32Bvh::new(Bvh::build(&c.mesh, &BuildOptions::default()), &c.mesh);
-        let mut cl_brute = ClTracer::brute(&device, &brute_program, &brute.triangles).unwrap();
-        let bvh_program = ClTracer::compile_bvh(&device, flat.depth).unwrap();
-        let mut cl_bvh = ClTracer::bvh(&device, &bvh_program, &flat).unwrap();
-
-        let results = [
-            ("cpu brute force", cpu_misses(&brute, &c.rays)),
-            ("cpu bvh", cpu_misses(&flat, &c.rays)),
-            ("opencl brute force", device_misses(&mut cl_brute, &c.rays)),
-            ("opencl bvh", device_misses(&mut cl_bvh, &c.rays)),
+        let mut results = vec![
+            ("cpu-brute".to_string(), cpu_misses(&brute, &c.rays)),
+            ("cpu-bvh".to_string(), cpu_misses(&flat, &c.rays)),
         ];
+        for tracer in DeviceTracer::all() {
+            let mut cl = tracer.prepare(&device, &c.mesh, &BuildOptions::default());
+            results.push((tracer.name(), device_misses(&mut cl, &c.rays)));
+        }
         for (tracer, (closest, any)) in results {
             eprintln!(
                 "{}: {tracer}: {closest} closest-hit and {any} any-hit misses",

@@ -1,11 +1,14 @@
-//! Shared test helpers: scenes, the OpenCL device, and the per-pixel oracle comparison.
+//! Shared test helpers: scenes, the OpenCL device, the per-pixel oracle comparison, the
+//! checks every tracer is held to ([`tracers`]) and the `cltrace` binary ([`command`]).
 
 #![allow(dead_code)]
+
+pub mod command;
+pub mod tracers;
 
 use std::path::PathBuf;
 
 use cltrace::brute::BruteForce;
-use cltrace::bvh::Bin32Bvh;
 use cltrace::bvh::{BuildOptions, Builder};
 use cltrace::camera::{Camera, Pinhole};
 use cltrace::device::{ClDevice, DeviceSelector};
@@ -30,12 +33,20 @@ pub fn generate(g: Generator) -> Mesh {
     g.generate().expect("valid generator")
 }
 
-/// `../shared/scenes/<name>` when the shared meshes are there; otherwise prints a notice
-/// and returns `None`, so the test skips.
+/// The shared scenes' folder: `CLTRACE_SCENES`, else `../shared/scenes`; a relative path is
+/// taken from the crate's root.
+pub fn scenes_dir() -> PathBuf {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    match std::env::var_os("CLTRACE_SCENES") {
+        Some(dir) if !dir.is_empty() => root.join(dir),
+        _ => root.join("../shared/scenes"),
+    }
+}
+
+/// `<scenes_dir()>/<name>` when the shared meshes are there; otherwise prints a notice and
+/// returns `None`, so the test skips the part that needs it.
 pub fn shared_scene(name: &str) -> Option<PathBuf> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/scenes")
-        .join(name);
+    let path = scenes_dir().join(name);
     if path.exists() {
         Some(path)
     } else {
@@ -132,34 +143,94 @@ pub fn all_options() -> Vec<BuildOptions> {
     ]
 }
 
-/// Closest hits through the BVH equal brute force's: the same triangle, or an exact tie.
-pub fn same_hits(mesh: &Mesh, bvh: &Bin32Bvh, rays: &[Ray]) -> Result<(), String> {
+/// Closest hits of `tracer` (any implementation of [`ClosestHit`]) equal brute force's:
+/// the same triangle at the same ray parameter, or an exact tie (another triangle really
+/// hit at the same parameter); and its any-hit answers agree: something is hit exactly
+/// when brute force's closest hit exists, and the triangle it names is really hit.
+pub fn same_hits<T: ClosestHit>(mesh: &Mesh, tracer: &T, rays: &[Ray]) -> Result<(), String> {
     let brute = BruteForce {
         triangles: triangles_in_order(mesh, 0..mesh.triangle_count() as u32),
     };
+    let prim = |i: usize| tracer.triangles()[i].prim as usize;
     for (i, ray) in rays.iter().enumerate() {
         let a = brute.closest_hit(ray, f32::INFINITY);
-        let b = bvh.closest_hit(ray, f32::INFINITY);
+        let b = tracer.closest_hit(ray, f32::INFINITY);
         match (a, b) {
             (None, None) => {}
             (Some((ia, ta)), Some((ib, tb))) => {
-                let prim_b = bvh.triangles[ib].prim as usize;
+                let prim_b = prim(ib);
                 let tie = ta == tb && hit_distance(ray, &brute.triangles[prim_b]).is_some();
                 if ia != prim_b && !tie {
                     return Err(format!(
-                        "ray {i}: brute force hits {ia} at {ta}, the BVH {prim_b} at {tb}"
+                        "ray {i}: brute force hits {ia} at {ta}, the tracer {prim_b} at {tb}"
                     ));
                 }
                 if ta != tb {
                     return Err(format!(
-                        "ray {i}: triangle {ia} at {ta} by brute force, {tb} through the BVH"
+                        "ray {i}: triangle {ia} at {ta} by brute force, {tb} by the tracer"
                     ));
                 }
             }
-            (a, b) => return Err(format!("ray {i}: brute force {a:?}, BVH {b:?}")),
+            (a, b) => return Err(format!("ray {i}: brute force {a:?}, the tracer {b:?}")),
+        }
+        match (a, tracer.trace(ray, f32::INFINITY, true)) {
+            (None, None) => {}
+            (Some(_), Some((j, _))) => {
+                if hit_distance(ray, &brute.triangles[prim(j)]).is_none() {
+                    return Err(format!(
+                        "ray {i}: the any-hit triangle {} is not hit",
+                        prim(j)
+                    ));
+                }
+            }
+            (a, any) => {
+                return Err(format!(
+                    "ray {i}: brute force's closest hit {a:?}, the tracer's any hit {any:?}"
+                ));
+            }
         }
     }
     Ok(())
+}
+
+/// `n` copies of one triangle.
+pub fn copies(tri: [Vec3; 3], n: usize) -> Mesh {
+    Mesh::new(tri.to_vec(), vec![[0, 1, 2]; n])
+}
+
+/// Zero-area triangles along one line: boxes without area.
+pub fn collinear() -> Mesh {
+    let line: Vec<Vec3> = (0..300)
+        .map(|i| Vec3::new(i as f32 * 0.1, 0.0, 0.0))
+        .collect();
+    let tris = (0..100u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+    Mesh::new(line, tris)
+}
+
+/// Triangles sharing a corner, each 1.45 times larger than the last: the SAH wants a chain
+/// far deeper than a balanced tree.
+pub fn chain() -> Mesh {
+    let mut mesh = Mesh::default();
+    for i in 0..74 {
+        let s = 1.45f32.powi(i);
+        let base = mesh.positions.len() as u32;
+        mesh.positions
+            .extend([Vec3::ZERO, Vec3::new(s, 0.0, 0.0), Vec3::new(0.0, s, 0.0)]);
+        mesh.triangles.push([base, base + 1, base + 2]);
+    }
+    mesh
+}
+
+/// One ray straight down onto each triangle of [`chain`].
+pub fn chain_rays() -> Vec<Ray> {
+    (0..74)
+        .map(|i| {
+            Ray::new(
+                Vec3::new(0.3, 0.3, 0.0) * 1.45f32.powi(i) + Vec3::Z,
+                Vec3::NEG_Z,
+            )
+        })
+        .collect()
 }
 
 /// Rays from points around the mesh's box towards points inside it.

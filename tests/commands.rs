@@ -1,0 +1,333 @@
+//! End-to-end runs of `cltrace bench` and `cltrace tune` on a tiny generated scene, and the
+//! tuning cache as `cltrace render` reads it: the one `CLTRACE_TUNE_CACHE` names, never the
+//! user's.
+
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+use cltrace::bvh::Layout;
+use cltrace::device::{DeviceInfo, DeviceSelector, default_layout, list_devices};
+use cltrace::tune::{SHAPES, TuneCache, Tuning};
+
+use crate::common::command::{BIN, cltrace, no_tune_cache, run, succeeded, test_home, text};
+
+/// A generated sphere of 80 triangles, as a scene file in `dir`.
+fn tiny_scene(dir: &Path) -> PathBuf {
+    let scene = dir.join("sphere.toml");
+    std::fs::write(&scene, "[generator]\nkind = \"sphere\"\nsubdivisions = 1\n").unwrap();
+    scene
+}
+
+/// The device the tests run on (`CLTRACE_DEVICE`, else the default), as the binary's
+/// `--device` and `--devices` flags name it.
+fn test_device() -> DeviceInfo {
+    let selector = DeviceSelector::from_flag_or_env(None).expect("valid CLTRACE_DEVICE");
+    let devices = list_devices().expect("the OpenCL devices can be listed");
+    selector
+        .pick(&devices)
+        .unwrap_or_else(|e| panic!("the tests need a device: {e}"))
+        .clone()
+}
+
+/// `cltrace render -v` of the built-in scene at 32x24 through `cl-bvh` on the test device,
+/// with `extra` flags and, if given, `CLTRACE_TUNE_CACHE` pointing at `cache`. Returns the
+/// SAH cost the verbose `bvh:` line reports: it is the cost of the tree as laid out, so it
+/// tells the layouts that are not alike apart.
+fn render_sah(dir: &Path, device: &DeviceInfo, cache: Option<&Path>, extra: &[&str]) -> String {
+    let png = dir.join("render.png");
+    let mut cmd = cltrace();
+    cmd.args(["render", "-v", "--width", "32", "--height", "24"])
+        .args(["--method", "cl-bvh", "--device", &device.index()])
+        .arg("-o")
+        .arg(&png)
+        .args(extra);
+    if let Some(cache) = cache {
+        cmd.env("CLTRACE_TUNE_CACHE", cache);
+    }
+    let out = run(cmd);
+    succeeded(&out);
+    assert!(png.is_file(), "no image");
+    std::fs::remove_file(&png).unwrap();
+    let stderr = text(&out.stderr);
+    let line = stderr
+        .lines()
+        .find(|l| l.starts_with("bvh: "))
+        .unwrap_or_else(|| panic!("no `bvh:` line in the verbose output:\n{stderr}"));
+    line.split("SAH cost ")
+        .nth(1)
+        .and_then(|rest| rest.split(',').next())
+        .unwrap_or_else(|| panic!("no SAH cost in {line:?}"))
+        .to_string()
+}
+
+/// A tuning cache for `device` naming `layout` and `work_group`, in the file format
+/// `cltrace tune` writes (a table per device key).
+fn write_cache(path: &Path, device: &DeviceInfo, layout: Layout, work_group: [usize; 2]) {
+    let text = format!(
+        "# written by the tests\n[{:?}]\nlayout = \"{}\"\nwork_group = [{}, {}]\n\
+         primary_mrays = 1.0\ndiffuse_mrays = 1.0\nscene = \"test\"\n",
+        device.key(),
+        layout.name(),
+        work_group[0],
+        work_group[1]
+    );
+    std::fs::write(path, text).unwrap();
+    // The file says what the test means: the library reads it back as that tuning.
+    let tuning = TuneCache::load(path).get(device).cloned();
+    assert_eq!(
+        tuning.map(|t| (t.layout, t.work_group)),
+        Some((layout, work_group)),
+        "{} does not read back as written",
+        path.display()
+    );
+}
+
+/// The runs of the tests see a tuning cache of their own, in the build's scratch folder,
+/// that does not exist, and a home and cache folder there too.
+#[test]
+fn runs_of_the_binary_never_see_the_users_tuning_cache() {
+    let cmd = cltrace();
+    let env: Vec<(String, Option<PathBuf>)> = cmd
+        .get_envs()
+        .map(|(k, v)| (k.to_string_lossy().into_owned(), v.map(PathBuf::from)))
+        .collect();
+    let get = |name: &str| {
+        env.iter()
+            .find(|(k, _)| k == name)
+            .and_then(|(_, v)| v.clone())
+            .unwrap_or_else(|| panic!("{name} is not set for the runs"))
+    };
+    let home = test_home();
+    assert!(home.starts_with(env!("CARGO_TARGET_TMPDIR")));
+    assert_eq!(get("HOME"), home);
+    assert!(get("XDG_CACHE_HOME").starts_with(&home));
+    assert_eq!(get("CLTRACE_TUNE_CACHE"), no_tune_cache());
+    assert!(
+        !no_tune_cache().exists(),
+        "something wrote the tests' tuning cache"
+    );
+    assert_eq!(cmd.get_program(), BIN);
+}
+
+/// `cltrace render` takes the layout from the cache `CLTRACE_TUNE_CACHE` names; without
+/// one, or with one it cannot read, the device's default. (`-v` shows the layout only
+/// through the laid-out tree's SAH cost, and the work-group not at all: a cached one the
+/// device cannot run must only not fail the render.)
+#[test]
+fn render_reads_the_tuning_cache_it_is_pointed_at() {
+    let dir = tempfile::tempdir().unwrap();
+    let device = test_device();
+    let default = default_layout(&device);
+    // A layout whose tree costs differently from the default's (bin64's cost is bin32's).
+    let cached = if matches!(default, Layout::Bin32 | Layout::Bin64) {
+        Layout::Wide8
+    } else {
+        Layout::Bin64
+    };
+    let sah_of =
+        |layout: Layout| render_sah(dir.path(), &device, None, &["--layout", layout.name()]);
+    let (cached_sah, default_sah) = (sah_of(cached), sah_of(default));
+    assert_ne!(
+        cached_sah,
+        default_sah,
+        "{} and {} cost the same: the test cannot tell them apart",
+        cached.name(),
+        default.name()
+    );
+
+    let cache = dir.path().join("tune.toml");
+    write_cache(&cache, &device, cached, [16, 4]);
+    assert_eq!(
+        render_sah(dir.path(), &device, Some(&cache), &[]),
+        cached_sah,
+        "with the cache naming {}",
+        cached.name()
+    );
+    // A flag still wins over the cache.
+    assert_eq!(
+        render_sah(
+            dir.path(),
+            &device,
+            Some(&cache),
+            &["--layout", default.name()]
+        ),
+        default_sah
+    );
+    // Not pointed at it: the device's default.
+    assert_eq!(render_sah(dir.path(), &device, None, &[]), default_sah);
+    // A work-group beyond the device's limit is ignored, the layout still taken.
+    let big = device.max_work_group_size + 1;
+    write_cache(&cache, &device, cached, [big, 1]);
+    assert_eq!(
+        render_sah(dir.path(), &device, Some(&cache), &[]),
+        cached_sah
+    );
+    // A cache that does not parse is no cache.
+    std::fs::write(&cache, "this is not a tuning cache [").unwrap();
+    assert_eq!(
+        render_sah(dir.path(), &device, Some(&cache), &[]),
+        default_sah
+    );
+}
+
+/// Splits a Markdown table's body rows into cells.
+fn markdown_rows(table: &str) -> (Vec<String>, Vec<Vec<String>>) {
+    let cells = |line: &str| -> Vec<String> {
+        line.trim()
+            .trim_matches('|')
+            .split('|')
+            .map(|c| c.trim().to_string())
+            .collect()
+    };
+    let mut lines = table.lines().filter(|l| l.starts_with('|'));
+    let header = cells(lines.next().expect("a table header"));
+    let separator = lines.next().expect("a separator row");
+    assert!(separator.starts_with("|---"), "{table}");
+    (header, lines.map(cells).collect())
+}
+
+/// One repetition of `cpu-bvh` and `cl-bvh` (bin32) at 32x24: a Markdown table with a row
+/// per method, and the same rows as CSV and JSON, each with a positive speed.
+#[test]
+fn bench_writes_a_table_csv_and_json_with_a_row_per_method() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = tiny_scene(dir.path());
+    let (csv_path, json_path) = (dir.path().join("bench.csv"), dir.path().join("bench.json"));
+    let device = test_device();
+    let mut cmd = cltrace();
+    cmd.arg("bench")
+        .arg(&scene)
+        .args(["--methods", "cpu-bvh,cl-bvh", "--layouts", "bin32"])
+        .args(["--rays", "primary", "--resolutions", "32x24"])
+        .args(["--warmup", "0", "--repetitions", "1"])
+        .args(["--devices", &device.index()])
+        .arg("--csv")
+        .arg(&csv_path)
+        .arg("--json")
+        .arg(&json_path);
+    let out: Output = run(cmd);
+    succeeded(&out);
+    let methods = ["cpu-bvh", "cl-bvh:bin32"];
+
+    let stdout = text(&out.stdout);
+    let (header, rows) = markdown_rows(&stdout);
+    let column = |name: &str| {
+        header
+            .iter()
+            .position(|h| h == name)
+            .unwrap_or_else(|| panic!("no {name} column in\n{stdout}"))
+    };
+    let (method, mrays, resolution) = (column("method"), column("Mrays/s"), column("resolution"));
+    let table_methods: Vec<&str> = rows.iter().map(|r| r[method].as_str()).collect();
+    assert_eq!(table_methods, methods, "{stdout}");
+    for row in &rows {
+        assert_eq!(row.len(), header.len(), "{stdout}");
+        assert_eq!(row[resolution], "32x24", "{stdout}");
+        let speed: f64 = row[mrays].parse().unwrap_or_else(|_| panic!("{stdout}"));
+        assert!(speed > 0.0, "{stdout}");
+    }
+
+    let mut csv = csv::Reader::from_path(&csv_path).unwrap();
+    let csv_header: Vec<String> = csv.headers().unwrap().iter().map(String::from).collect();
+    for field in [
+        "scene",
+        "width",
+        "height",
+        "method",
+        "device",
+        "mrays_per_s",
+    ] {
+        assert!(
+            csv_header.iter().any(|h| h == field),
+            "{field} in {csv_header:?}"
+        );
+    }
+    let at = |name: &str| csv_header.iter().position(|h| h == name).unwrap();
+    let csv_rows: Vec<(String, f64)> = csv
+        .records()
+        .map(|r| {
+            let r = r.unwrap();
+            (
+                r[at("method")].to_string(),
+                r[at("mrays_per_s")].parse().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        csv_rows.iter().map(|(m, _)| m.as_str()).collect::<Vec<_>>(),
+        methods
+    );
+    assert!(csv_rows.iter().all(|(_, s)| *s > 0.0), "{csv_rows:?}");
+
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
+    let json_rows: Vec<(String, f64)> = json
+        .as_array()
+        .expect("a JSON array of rows")
+        .iter()
+        .map(|r| {
+            assert_eq!(r["width"], 32, "{r}");
+            assert_eq!(r["height"], 24, "{r}");
+            (
+                r["method"].as_str().unwrap().to_string(),
+                r["mrays_per_s"].as_f64().unwrap(),
+            )
+        })
+        .collect();
+    // The same rows; the speeds to the last bits serde_json's float parsing keeps.
+    let same = json_rows.len() == csv_rows.len()
+        && json_rows
+            .iter()
+            .zip(&csv_rows)
+            .all(|((m, s), (n, t))| m == n && (s - t).abs() <= 1e-12 * s.abs().max(t.abs()));
+    assert!(same, "the JSON holds {json_rows:?}, the CSV {csv_rows:?}");
+}
+
+/// `cltrace tune` (one repetition, the test device) writes a cache naming a layout and a
+/// work-group for the device, and a render pointed at that cache takes its layout.
+#[test]
+fn tune_writes_a_cache_that_render_then_reads() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = tiny_scene(dir.path());
+    let cache = dir.path().join("cache").join("tune.toml");
+    let device = test_device();
+    let mut cmd = cltrace();
+    cmd.arg("tune")
+        .arg(&scene)
+        .args(["--repetitions", "1", "--devices", &device.index()])
+        .arg("--cache")
+        .arg(&cache);
+    let out = run(cmd);
+    succeeded(&out);
+    let stdout = text(&out.stdout);
+    let (header, rows) = markdown_rows(&stdout);
+    assert_eq!(header[..3], ["device", "layout", "work-group"], "{stdout}");
+    assert!(!rows.is_empty(), "{stdout}");
+
+    let tuned: Tuning = TuneCache::load(&cache)
+        .get(&device)
+        .cloned()
+        .unwrap_or_else(|| panic!("{} holds no tuning for {}", cache.display(), device.key()));
+    assert!(SHAPES.contains(&tuned.work_group), "{tuned:?}");
+    assert!(
+        tuned.primary_mrays > 0.0 && tuned.diffuse_mrays > 0.0,
+        "{tuned:?}"
+    );
+    assert!(
+        rows.iter().any(|r| r[1] == tuned.layout.name()),
+        "the cached layout {} is not among the measured:\n{stdout}",
+        tuned.layout.name()
+    );
+    assert!(
+        !no_tune_cache().exists(),
+        "tune wrote the tests' shared cache"
+    );
+
+    let expected = render_sah(
+        dir.path(),
+        &device,
+        None,
+        &["--layout", tuned.layout.name()],
+    );
+    assert_eq!(render_sah(dir.path(), &device, Some(&cache), &[]), expected);
+}

@@ -1,0 +1,55 @@
+//! Running the `cltrace` binary. Every run the tests make goes through [`cltrace`], which
+//! points the tuning cache (`CLTRACE_TUNE_CACHE`) at a file that is never written, and
+//! `HOME` and `XDG_CACHE_HOME` into a folder of the build's own, so that no run reads (or
+//! writes) the user's `~/.cache/cltrace/tune.toml`.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+pub const BIN: &str = env!("CARGO_BIN_EXE_cltrace");
+
+/// The home folder the runs see: `cltrace-home` under the build's test scratch folder.
+/// Nothing the tests run writes a tuning cache there (a test that tunes names its own
+/// `--cache`); device drivers may keep their kernel caches in it.
+pub fn test_home() -> PathBuf {
+    let home = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cltrace-home");
+    std::fs::create_dir_all(&home).expect("the test home folder can be made");
+    home
+}
+
+/// Where the runs' `CLTRACE_TUNE_CACHE` points: a file that does not exist.
+pub fn no_tune_cache() -> PathBuf {
+    test_home().join("no-tune-cache.toml")
+}
+
+/// The `cltrace` binary, isolated from the user's caches (see the module's documentation).
+/// A test that wants a tuning cache sets `CLTRACE_TUNE_CACHE` again.
+pub fn cltrace() -> Command {
+    let home = test_home();
+    let mut cmd = Command::new(BIN);
+    cmd.env("HOME", &home)
+        .env("XDG_CACHE_HOME", home.join(".cache"))
+        .env("CLTRACE_TUNE_CACHE", no_tune_cache());
+    cmd
+}
+
+/// Runs `cmd` to the end.
+pub fn run(mut cmd: Command) -> Output {
+    cmd.output().expect("the cltrace binary runs")
+}
+
+pub fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// Fails the test, showing both streams, unless the run succeeded.
+#[track_caller]
+pub fn succeeded(out: &Output) {
+    assert!(
+        out.status.success(),
+        "cltrace failed with {:?}\nstdout: {}\nstderr: {}",
+        out.status.code(),
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+}

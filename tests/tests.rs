@@ -1,0 +1,20 @@
+//! The integration tests, linked once: each `tests/<name>.rs` is the module `<name>` of this
+//! one test binary (`cargo test --release --test tests <name>` runs one of them), with the
+//! shared helpers in `tests/common/`.
+
+mod common;
+
+mod bad_input_corpus;
+mod bvh;
+mod bvh_optimize;
+mod cli;
+mod commands;
+mod concurrency;
+mod fuzz_regressions;
+mod layout;
+mod limits;
+mod loaders;
+mod opencl_vs_cpu;
+mod secondary;
+mod tracers;
+mod watertight;
