@@ -14,6 +14,7 @@ mod fuzz_regressions;
 mod layout;
 mod limits;
 mod loaders;
+mod module_graph;
 mod opencl_vs_cpu;
 mod secondary;
 mod tracers;
