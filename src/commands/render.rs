@@ -137,6 +137,25 @@ pub fn sample_settings(
     Ok(Some((settings, render.spp.unwrap_or(default_spp))))
 }
 
+/// Runs a render request and reports it on stderr: the image written (size, method,
+/// device) and the stage timings.
+pub fn render(req: &RenderRequest) -> Result<()> {
+    let outcome = run(req)?;
+    let on = outcome
+        .device
+        .map(|d| format!(" on {d}"))
+        .unwrap_or_default();
+    req.verbosity.say(format!(
+        "wrote {} ({}x{}, {}{on})",
+        req.output.display(),
+        outcome.frame.width,
+        outcome.frame.height,
+        outcome.method.name(),
+    ));
+    req.verbosity.say(outcome.timings.summary());
+    Ok(())
+}
+
 /// Runs a render request end to end. Every check that needs no work (output format and
 /// folder, resolution, field of view, device) happens before the mesh is loaded. With
 /// `--fallback cpu`, a device failure (none found, a failed build, out of memory, lost)
