@@ -31,7 +31,7 @@ use crate::renderer::{PrepareOptions, Renderer};
 use crate::report::{Timings, Verbosity};
 
 /// The kinds of rays of the benchmark protocol.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum RayKind {
     /// One closest-hit ray per pixel from the eye.
@@ -43,11 +43,42 @@ pub enum RayKind {
 }
 
 impl RayKind {
+    pub const ALL: [RayKind; 2] = [RayKind::Primary, RayKind::Diffuse];
+
     pub fn name(self) -> &'static str {
         match self {
             RayKind::Primary => "primary",
             RayKind::Diffuse => "diffuse",
         }
+    }
+
+    /// One line on the kind, for `--help`.
+    pub fn about(self) -> &'static str {
+        match self {
+            RayKind::Primary => "One closest-hit ray per pixel from the eye",
+            RayKind::Diffuse => {
+                "For each pixel whose primary ray hit, one closest-hit ray from the hit point \
+                 (offset by 1e-4 of the scene radius along the normal turned to the eye) in a \
+                 cosine-weighted direction about that normal: the incoherent case"
+            }
+        }
+    }
+}
+
+impl std::str::FromStr for RayKind {
+    type Err = String;
+
+    /// The kind [`RayKind::name`] names.
+    fn from_str(s: &str) -> Result<Self, String> {
+        RayKind::ALL
+            .into_iter()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| {
+                format!(
+                    "`{s}` is not a ray kind: use {}",
+                    RayKind::ALL.map(RayKind::name).join(", ")
+                )
+            })
     }
 }
 

@@ -52,19 +52,14 @@ pub struct RenderRequest {
     pub device: Option<String>,
     /// How to build the BVH, for BVH methods.
     pub build: BuildOptions,
-    /// Where to go when the OpenCL device fails; `None` means the error ends the run.
-    pub fallback: Option<Fallback>,
+    /// When the OpenCL device fails (none found, a failed build, out of memory, lost),
+    /// render with the same method on the host (cl-bvh becomes cpu-bvh, cl-brute
+    /// cpu-brute) instead of ending the run with the error.
+    pub fallback_to_cpu: bool,
     /// The tuning cache to read the device's layout and work-group from (`cltrace tune`
     /// writes it); `None` reads none.
     pub tune_cache: Option<PathBuf>,
     pub verbosity: Verbosity,
-}
-
-/// Where `--fallback` sends a render whose OpenCL device fails.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Fallback {
-    /// The same method on the host: cl-bvh becomes cpu-bvh, cl-brute cpu-brute.
-    Cpu,
 }
 
 /// What a finished render reports.
@@ -158,7 +153,7 @@ pub fn render(req: &RenderRequest) -> Result<()> {
 
 /// Runs a render request end to end. Every check that needs no work (output format and
 /// folder, resolution, field of view, device) happens before the mesh is loaded. With
-/// `--fallback cpu`, a device failure (none found, a failed build, out of memory, lost)
+/// `fallback_to_cpu` (`--fallback cpu`), a device failure (none found, a failed build, out of memory, lost)
 /// reruns the render on the host, saying so; without it, it is the run's error.
 pub fn run(req: &RenderRequest) -> Result<RenderOutcome> {
     let scene = SceneDescription::named(req.scene.as_deref())?;
@@ -167,8 +162,8 @@ pub fn run(req: &RenderRequest) -> Result<RenderOutcome> {
         .method
         .or(scene.render.method)
         .unwrap_or(DEFAULT_METHOD);
-    match (render_with(req, &scene, method), req.fallback) {
-        (Err(e @ Error::Device(_)), Some(Fallback::Cpu)) => {
+    match render_with(req, &scene, method) {
+        Err(e @ Error::Device(_)) if req.fallback_to_cpu => {
             let host = match method {
                 Method::ClBrute => Method::CpuBrute,
                 _ => Method::CpuBvh,
@@ -179,7 +174,7 @@ pub fn run(req: &RenderRequest) -> Result<RenderOutcome> {
             ));
             render_with(req, &scene, host)
         }
-        (outcome, _) => outcome,
+        outcome => outcome,
     }
 }
 

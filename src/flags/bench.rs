@@ -1,6 +1,7 @@
 //! `cltrace bench`'s flags.
 
 use std::path::PathBuf;
+use std::sync::LazyLock;
 
 use clap::Args;
 
@@ -11,7 +12,12 @@ use cltrace::render::Method;
 use cltrace::report::Verbosity;
 
 use super::build::BuildArgs;
-use super::values::{device_list, parse_resolution};
+use super::values::{all_names, choice, device_list, parse_resolution};
+
+/// Every method, every layout, every ray kind: the defaults of the lists.
+static METHODS: LazyLock<String> = LazyLock::new(all_names::<Method>);
+static LAYOUTS: LazyLock<String> = LazyLock::new(all_names::<Layout>);
+static RAY_KINDS: LazyLock<String> = LazyLock::new(all_names::<RayKind>);
 
 pub const EXAMPLES: &str = "\
 Examples:
@@ -36,18 +42,18 @@ pub struct BenchArgs {
     /// Methods to measure, comma-separated
     #[arg(
         long,
-        value_enum,
+        value_parser = choice::<Method>(),
         value_delimiter = ',',
-        default_value = "cpu-brute,cpu-bvh,cl-brute,cl-bvh"
+        default_value = METHODS.as_str()
     )]
     methods: Vec<Method>,
 
     /// BVH node layouts to measure cl-bvh in, comma-separated
     #[arg(
         long,
-        value_enum,
+        value_parser = choice::<Layout>(),
         value_delimiter = ',',
-        default_value = "bin32,bin64,wide4,wide8,cwbvh"
+        default_value = LAYOUTS.as_str()
     )]
     layouts: Vec<Layout>,
 
@@ -58,9 +64,9 @@ pub struct BenchArgs {
     /// Ray kinds to measure, comma-separated
     #[arg(
         long,
-        value_enum,
+        value_parser = choice::<RayKind>(),
         value_delimiter = ',',
-        default_value = "primary,diffuse"
+        default_value = RAY_KINDS.as_str()
     )]
     rays: Vec<RayKind>,
 

@@ -4,11 +4,13 @@ use clap::Args;
 
 use cltrace::bvh::{BuildOptions, Builder};
 
+use super::values::choice;
+
 /// BVH construction flags, shared by the commands that build one.
 #[derive(Args)]
 pub struct BuildArgs {
     /// BVH builder: binned SAH (fast) or the exact sweep (slow, the quality reference)
-    #[arg(long, value_enum, default_value = "binned")]
+    #[arg(long, value_parser = choice::<Builder>(), default_value = Builder::default().name())]
     builder: Builder,
 
     /// Bins per axis for the binned builder (2 to 64)

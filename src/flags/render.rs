@@ -2,17 +2,17 @@
 
 use std::path::PathBuf;
 
-use clap::Args;
+use clap::{Args, ValueEnum};
 
 use cltrace::bvh::Layout;
 use cltrace::camera::CameraSettings;
-use cltrace::commands::render::{Fallback, RenderRequest};
+use cltrace::commands::render::RenderRequest;
 use cltrace::input::scene_file::RenderSettings;
 use cltrace::render::{Method, Shade};
 use cltrace::report::Verbosity;
 
 use super::build::BuildArgs;
-use super::values::parse_vec3;
+use super::values::{choice, parse_vec3};
 
 #[derive(Args)]
 pub struct RenderArgs {
@@ -54,16 +54,16 @@ pub struct RenderArgs {
     device: Option<String>,
 
     /// How rays find their closest hit [default: scene's, else cl-bvh]
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = choice::<Method>())]
     method: Option<Method>,
 
     /// BVH node layout of cl-bvh [default: scene's, else bin32]
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = choice::<Layout>())]
     layout: Option<Layout>,
 
     /// How hits are coloured [default: scene's, else lambert]; ao, shadow and path
     /// accumulate samples (--spp) and trace secondary rays
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = choice::<Shade>())]
     shade: Option<Shade>,
 
     /// Samples per pixel for ao, shadow and path, 1 to 65536 [default: scene's, else 16
@@ -142,9 +142,17 @@ impl RenderArgs {
             hits: self.hits,
             device: self.device,
             build: self.build.options(),
-            fallback: self.fallback,
+            fallback_to_cpu: self.fallback == Some(Fallback::Cpu),
             tune_cache: cltrace::tune::cache_path(),
             verbosity: Verbosity::from_flags(self.quiet, self.verbose),
         }
     }
+}
+
+/// Where `--fallback` sends a render whose OpenCL device fails: one place for now, named so
+/// that the flag reads `--fallback cpu`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Fallback {
+    /// The same method on the host: cl-bvh becomes cpu-bvh, cl-brute cpu-brute.
+    Cpu,
 }
