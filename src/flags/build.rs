@@ -2,6 +2,7 @@
 
 use clap::Args;
 
+use cltrace::bvh::optimize::{MAX_ROUNDS, MIN_ROUND_GAIN};
 use cltrace::bvh::{BuildOptions, Builder};
 
 use super::values::choice;
@@ -21,9 +22,12 @@ pub struct BuildArgs {
     #[arg(long, default_value_t = BuildOptions::default().max_leaf_size)]
     max_leaf_size: u32,
 
-    /// Optimize the built tree by node reinsertion for up to N rounds (0 to 1000; 0 is off):
-    /// a lower SAH cost for more build time; rounds stop early once one gains under 0.01%
-    #[arg(long, value_name = "N", default_value_t = BuildOptions::default().optimize_rounds)]
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = BuildOptions::default().optimize_rounds,
+        help = optimize_help()
+    )]
     optimize: u32,
 }
 
@@ -37,4 +41,12 @@ impl BuildArgs {
             ..BuildOptions::default()
         }
     }
+}
+
+fn optimize_help() -> String {
+    format!(
+        "Optimize the built tree by node reinsertion for up to N rounds (0 to {MAX_ROUNDS}; 0 is \
+         off): a lower SAH cost for more build time; rounds stop early once one gains under {}%",
+        MIN_ROUND_GAIN * 100.0
+    )
 }
