@@ -1,6 +1,7 @@
-//! `cltrace bench`: every method on every device for every scene and resolution, timed
-//! as `BENCHMARK.md` says (auto framing, warm-up, median and minimum of repetitions, device
-//! time from profiling events), one row per run.
+//! `cltrace bench`: every method on every device for every scene and resolution, timed by
+//! the benchmark protocol (`../shared/BENCHMARK.md`, outside the repository): auto framing,
+//! warm-up, median and minimum of repetitions, device time from OpenCL profiling events; one
+//! row per run.
 
 mod scaling;
 mod table;
@@ -103,7 +104,7 @@ pub fn tile_order(width: u32, height: u32, tile: u32) -> impl Iterator<Item = u3
 /// seed 0, keyed by pixel, so the rays are the same on every machine. They come in the order
 /// of [`tile_order`], as the render kernels' 2D work-groups trace their bounces: rays from
 /// neighbouring pixels start close together and share the nodes around their origins (on
-/// the H100, 16 x 16 tiles traced 4-8% faster than scanline order; README, Performance).
+/// the H100, 16 x 16 tiles traced 4-8% faster than scanline order; docs/performance.md).
 pub fn diffuse_rays(mesh: &Mesh, camera: &Camera) -> Vec<Ray> {
     use crate::intersect::ClosestHit;
     use crate::render::integrator::facing_normal;
@@ -155,7 +156,7 @@ pub struct BenchRequest {
     pub verbosity: Verbosity,
 }
 
-/// One measured (or skipped) run: the columns of `BENCHMARK.md`.
+/// One measured (or skipped) run: the columns of the benchmark protocol's tables.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct BenchRow {
     pub scene: String,

@@ -50,8 +50,8 @@ pub enum Command {
     Render(RenderArgs),
     /// List every OpenCL platform and device, with the index `--device` accepts
     Devices,
-    /// Measure every method on every OpenCL device for each scene and resolution (the
-    /// benchmark protocol of BENCHMARK.md) and print a Markdown table
+    /// Measure every method on every OpenCL device for each scene and resolution (auto
+    /// framing, warm-up, the median of timed frames) and print a Markdown table
     #[command(after_help = bench::EXAMPLES)]
     Bench(BenchArgs),
     /// Find each OpenCL device's fastest BVH layout and work-group shape (primary and

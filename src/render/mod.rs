@@ -117,11 +117,6 @@ impl Shade {
         }
     }
 
-    /// Whether the mode accumulates samples (`--spp`) rather than shading one hit.
-    pub fn is_progressive(self) -> bool {
-        matches!(self, Shade::Ao | Shade::Shadow | Shade::Path)
-    }
-
     pub fn name(self) -> &'static str {
         match self {
             Shade::Normal => "normal",
