@@ -175,7 +175,10 @@ mod help {
     use std::fmt::Display;
 
     use cltrace::camera::{AUTO_FOV, DEFAULT_HEIGHT, DEFAULT_WIDTH, MAX_RESOLUTION};
-    use cltrace::commands::render::*;
+    use cltrace::commands::render::{
+        AO_DISTANCE_SHARE, DEFAULT_AO_SAMPLES, DEFAULT_LIGHT, DEFAULT_MAX_BOUNCES, DEFAULT_METHOD,
+        DEFAULT_SEED, DEFAULT_SHADE, DEFAULT_SPP, MAX_AO_SAMPLES, MAX_BOUNCES, MAX_SPP,
+    };
 
     /// `[default: scene's, else X]`.
     fn or_scene(default: impl Display) -> String {
