@@ -287,14 +287,6 @@ impl<'d> Renderer<'d> {
         Ok(times)
     }
 
-    /// The node layout the OpenCL BVH tracer uses (`None` for the other methods).
-    pub fn layout(&self) -> Option<Layout> {
-        match &self.tracer {
-            Tracer::Cl(t) => t.layout(),
-            _ => None,
-        }
-    }
-
     /// Sets the OpenCL kernels' work-group shape (ignored by the host methods).
     pub fn set_work_group(&mut self, shape: [usize; 2]) -> Result<()> {
         match &mut self.tracer {

@@ -1,6 +1,7 @@
-//! `cltrace bench`: every method on every device for every scene and resolution, timed
-//! as `BENCHMARK.md` says (auto framing, warm-up, median and minimum of repetitions, device
-//! time from profiling events), one row per run.
+//! `cltrace bench`: every method on every device for every scene and resolution, timed by
+//! the benchmark protocol (`../shared/BENCHMARK.md`, outside the repository): auto framing,
+//! warm-up, median and minimum of repetitions, device time from OpenCL profiling events; one
+//! row per run.
 
 mod scaling;
 mod table;
@@ -31,7 +32,7 @@ use crate::renderer::{PrepareOptions, Renderer};
 use crate::report::{Timings, Verbosity};
 
 /// The kinds of rays of the benchmark protocol.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum RayKind {
     /// One closest-hit ray per pixel from the eye.
@@ -43,11 +44,42 @@ pub enum RayKind {
 }
 
 impl RayKind {
+    pub const ALL: [RayKind; 2] = [RayKind::Primary, RayKind::Diffuse];
+
     pub fn name(self) -> &'static str {
         match self {
             RayKind::Primary => "primary",
             RayKind::Diffuse => "diffuse",
         }
+    }
+
+    /// One line on the kind, for `--help`.
+    pub fn about(self) -> &'static str {
+        match self {
+            RayKind::Primary => "One closest-hit ray per pixel from the eye",
+            RayKind::Diffuse => {
+                "For each pixel whose primary ray hit, one closest-hit ray from the hit point \
+                 (offset by 1e-4 of the scene radius along the normal turned to the eye) in a \
+                 cosine-weighted direction about that normal: the incoherent case"
+            }
+        }
+    }
+}
+
+impl std::str::FromStr for RayKind {
+    type Err = String;
+
+    /// The kind [`RayKind::name`] names.
+    fn from_str(s: &str) -> Result<Self, String> {
+        RayKind::ALL
+            .into_iter()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| {
+                format!(
+                    "`{s}` is not a ray kind: use {}",
+                    RayKind::ALL.map(RayKind::name).join(", ")
+                )
+            })
     }
 }
 
@@ -72,7 +104,7 @@ pub fn tile_order(width: u32, height: u32, tile: u32) -> impl Iterator<Item = u3
 /// seed 0, keyed by pixel, so the rays are the same on every machine. They come in the order
 /// of [`tile_order`], as the render kernels' 2D work-groups trace their bounces: rays from
 /// neighbouring pixels start close together and share the nodes around their origins (on
-/// the H100, 16 x 16 tiles traced 4-8% faster than scanline order; README, Performance).
+/// the H100, 16 x 16 tiles traced 4-8% faster than scanline order; docs/performance.md).
 pub fn diffuse_rays(mesh: &Mesh, camera: &Camera) -> Vec<Ray> {
     use crate::intersect::ClosestHit;
     use crate::render::integrator::facing_normal;
@@ -124,7 +156,7 @@ pub struct BenchRequest {
     pub verbosity: Verbosity,
 }
 
-/// One measured (or skipped) run: the columns of `BENCHMARK.md`.
+/// One measured (or skipped) run: the columns of the benchmark protocol's tables.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct BenchRow {
     pub scene: String,

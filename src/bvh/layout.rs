@@ -8,16 +8,7 @@ use crate::intersect::Triangle;
 
 /// The device layouts `--layout` chooses among.
 #[derive(
-    Clone,
-    Copy,
-    Debug,
-    Default,
-    PartialEq,
-    Eq,
-    Hash,
-    clap::ValueEnum,
-    serde::Deserialize,
-    serde::Serialize,
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Deserialize, serde::Serialize,
 )]
 #[serde(rename_all = "kebab-case")]
 pub enum Layout {
@@ -54,6 +45,20 @@ impl Layout {
         }
     }
 
+    /// One line on the layout, for `--help`.
+    pub fn about(self) -> &'static str {
+        match self {
+            Layout::Bin32 => "The thesis's 32-byte binary node: a node's box is stored in the node",
+            Layout::Bin64 => "Aila–Laine: 64-byte binary nodes holding both children's boxes",
+            Layout::Wide4 => "4-wide nodes (128 bytes), collapsed from the binary tree",
+            Layout::Wide8 => "8-wide nodes (256 bytes), collapsed from the binary tree",
+            Layout::Cwbvh => {
+                "Compressed 8-wide nodes (80 bytes, child boxes quantized to 8 bits; Ylitie et al. \
+                 2017), leaves of at most 3 triangles"
+            }
+        }
+    }
+
     /// The kernels' `LAYOUT` define.
     pub fn code(self) -> u32 {
         match self {
@@ -63,6 +68,23 @@ impl Layout {
             Layout::Wide8 => 8,
             Layout::Cwbvh => 80,
         }
+    }
+}
+
+impl std::str::FromStr for Layout {
+    type Err = String;
+
+    /// The layout [`Layout::name`] names.
+    fn from_str(s: &str) -> Result<Self, String> {
+        Layout::ALL
+            .into_iter()
+            .find(|l| l.name() == s)
+            .ok_or_else(|| {
+                format!(
+                    "`{s}` is not a layout: use {}",
+                    Layout::ALL.map(Layout::name).join(", ")
+                )
+            })
     }
 }
 

@@ -61,7 +61,7 @@ impl SahCost {
 }
 
 /// Which builder makes the tree.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Builder {
     /// Binned SAH over centroids on all three axes (Wald 2007), parallel: fast.
@@ -69,6 +69,46 @@ pub enum Builder {
     Binned,
     /// Exact SAH over every centroid-sorted split on all three axes: slow, the reference.
     Sweep,
+}
+
+impl Builder {
+    pub const ALL: [Builder; 2] = [Builder::Binned, Builder::Sweep];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Builder::Binned => "binned",
+            Builder::Sweep => "sweep",
+        }
+    }
+
+    /// One line on the builder, for `--help`.
+    pub fn about(self) -> &'static str {
+        match self {
+            Builder::Binned => {
+                "Binned SAH over centroids on all three axes (Wald 2007), parallel: fast"
+            }
+            Builder::Sweep => {
+                "Exact SAH over every centroid-sorted split on all three axes: slow, the reference"
+            }
+        }
+    }
+}
+
+impl std::str::FromStr for Builder {
+    type Err = String;
+
+    /// The builder [`Builder::name`] names.
+    fn from_str(s: &str) -> Result<Self, String> {
+        Builder::ALL
+            .into_iter()
+            .find(|b| b.name() == s)
+            .ok_or_else(|| {
+                format!(
+                    "`{s}` is not a builder: use {}",
+                    Builder::ALL.map(Builder::name).join(", ")
+                )
+            })
+    }
 }
 
 /// How to build.

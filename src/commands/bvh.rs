@@ -1,7 +1,7 @@
 //! `cltrace bvh`: builds a scene's BVH and reports what it looks like and what it cost.
 
 use std::fmt::Write;
-use std::path::Path;
+use std::path::PathBuf;
 
 use crate::bvh::{Bin32Bvh, DeviceLayout, Layout};
 use crate::bvh::{BuildOptions, Bvh, INTERSECTION_COST, TRAVERSAL_COST};
@@ -9,11 +9,22 @@ use crate::error::Result;
 use crate::input::scene_file::SceneDescription;
 use crate::report::{Timings, format_ms};
 
+/// Everything `cltrace bvh` was asked to do.
+#[derive(Clone, Debug)]
+pub struct BvhRequest {
+    /// A scene file or a mesh; `None` for the built-in default scene.
+    pub scene: Option<PathBuf>,
+    pub build: BuildOptions,
+    /// Builds (and optimizations) to run; the fastest is reported.
+    pub repeat: u32,
+}
+
 /// Loads the scene's mesh, builds its BVH `repeat` times (the fastest build is reported)
 /// and returns the report.
-pub fn bvh_report(scene: Option<&Path>, options: &BuildOptions, repeat: u32) -> Result<String> {
+pub fn bvh_report(req: &BvhRequest) -> Result<String> {
+    let (options, repeat) = (&req.build, req.repeat);
     options.check()?;
-    let scene = SceneDescription::named(scene)?;
+    let scene = SceneDescription::named(req.scene.as_deref())?;
     let mut timings = Timings::default();
     let mesh = timings.time("load", || scene.mesh.load())?;
     // The optimization is timed apart from the build (both the best of `repeat`).

@@ -16,6 +16,12 @@ use crate::render::{Frame, Method, Shade, ShadeParams, tone_map};
 use crate::renderer::{PrepareOptions, Renderer};
 use crate::report::{Timings, Verbosity};
 
+// The render settings' defaults and limits, declared here once: the render applies them
+// where neither the flags nor the scene file give a setting, and the flags' help
+// (src/flags/render.rs) is built from them. The camera's are in `crate::camera`
+// (`DEFAULT_WIDTH`, `DEFAULT_HEIGHT`, `AUTO_FOV`, `MAX_RESOLUTION`); cl-bvh's layout
+// defaults to the tuned one, else the device's (`crate::device::default_layout`).
+
 /// The method when neither the scene nor the flags name one.
 pub const DEFAULT_METHOD: Method = Method::ClBvh;
 /// The shading when neither the scene nor the flags name one.
@@ -25,12 +31,19 @@ pub const DEFAULT_SHADE: Shade = Shade::Lambert;
 pub const DEFAULT_SPP: [(Shade, u32); 3] = [(Shade::Path, 16), (Shade::Shadow, 4), (Shade::Ao, 1)];
 /// The most samples per pixel accepted (float sums stay exact to about 1 part in 10^3).
 pub const MAX_SPP: u32 = 65536;
+/// The seed of the random numbers of the progressive modes.
+pub const DEFAULT_SEED: u32 = 0;
+/// Ambient occlusion rays per sample.
 pub const DEFAULT_AO_SAMPLES: u32 = 16;
 pub const MAX_AO_SAMPLES: u32 = 1024;
 /// Ambient occlusion rays reach this share of the scene's bounding radius by default.
 pub const AO_DISTANCE_SHARE: f32 = 0.25;
+/// Bounces of the path tracer.
 pub const DEFAULT_MAX_BOUNCES: u32 = 8;
 pub const MAX_BOUNCES: u32 = 1024;
+/// The light of the shadow mode: a sun from above, left and in front (+z, where the auto
+/// framing puts the eye).
+pub const DEFAULT_LIGHT: &str = "sun:-0.4,1,0.6";
 
 /// The stop flag of progressive renders: set (by Ctrl-C, in the binary) to end sampling
 /// early and write what has accumulated.
@@ -52,19 +65,14 @@ pub struct RenderRequest {
     pub device: Option<String>,
     /// How to build the BVH, for BVH methods.
     pub build: BuildOptions,
-    /// Where to go when the OpenCL device fails; `None` means the error ends the run.
-    pub fallback: Option<Fallback>,
+    /// When the OpenCL device fails (none found, a failed build, out of memory, lost),
+    /// render with the same method on the host (cl-bvh becomes cpu-bvh, cl-brute
+    /// cpu-brute) instead of ending the run with the error.
+    pub fallback_to_cpu: bool,
     /// The tuning cache to read the device's layout and work-group from (`cltrace tune`
     /// writes it); `None` reads none.
     pub tune_cache: Option<PathBuf>,
     pub verbosity: Verbosity,
-}
-
-/// Where `--fallback` sends a render whose OpenCL device fails.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Fallback {
-    /// The same method on the host: cl-bvh becomes cpu-bvh, cl-brute cpu-brute.
-    Cpu,
 }
 
 /// What a finished render reports.
@@ -115,10 +123,12 @@ pub fn sample_settings(
             distance: render.ao_distance.unwrap_or(AO_DISTANCE_SHARE * radius),
         },
         Shade::Shadow => Lighting::Shadow {
-            light: match &render.light {
-                Some(l) => l.parse().map_err(Error::Invalid)?,
-                None => Light::default_sun(),
-            },
+            light: render
+                .light
+                .as_deref()
+                .unwrap_or(DEFAULT_LIGHT)
+                .parse()
+                .map_err(Error::Invalid)?,
         },
         Shade::Path => Lighting::Path {
             max_bounces: render.max_bounces.unwrap_or(DEFAULT_MAX_BOUNCES),
@@ -132,14 +142,33 @@ pub fn sample_settings(
     let settings = SampleSettings {
         lighting,
         offset: 1e-4 * radius,
-        seed: render.seed.unwrap_or(0),
+        seed: render.seed.unwrap_or(DEFAULT_SEED),
     };
     Ok(Some((settings, render.spp.unwrap_or(default_spp))))
 }
 
+/// Runs a render request and reports it on stderr: the image written (size, method,
+/// device) and the stage timings.
+pub fn render(req: &RenderRequest) -> Result<()> {
+    let outcome = run(req)?;
+    let on = outcome
+        .device
+        .map(|d| format!(" on {d}"))
+        .unwrap_or_default();
+    req.verbosity.say(format!(
+        "wrote {} ({}x{}, {}{on})",
+        req.output.display(),
+        outcome.frame.width,
+        outcome.frame.height,
+        outcome.method.name(),
+    ));
+    req.verbosity.say(outcome.timings.summary());
+    Ok(())
+}
+
 /// Runs a render request end to end. Every check that needs no work (output format and
 /// folder, resolution, field of view, device) happens before the mesh is loaded. With
-/// `--fallback cpu`, a device failure (none found, a failed build, out of memory, lost)
+/// `fallback_to_cpu` (`--fallback cpu`), a device failure (none found, a failed build, out of memory, lost)
 /// reruns the render on the host, saying so; without it, it is the run's error.
 pub fn run(req: &RenderRequest) -> Result<RenderOutcome> {
     let scene = SceneDescription::named(req.scene.as_deref())?;
@@ -148,8 +177,8 @@ pub fn run(req: &RenderRequest) -> Result<RenderOutcome> {
         .method
         .or(scene.render.method)
         .unwrap_or(DEFAULT_METHOD);
-    match (render_with(req, &scene, method), req.fallback) {
-        (Err(e @ Error::Device(_)), Some(Fallback::Cpu)) => {
+    match render_with(req, &scene, method) {
+        Err(e @ Error::Device(_)) if req.fallback_to_cpu => {
             let host = match method {
                 Method::ClBrute => Method::CpuBrute,
                 _ => Method::CpuBvh,
@@ -160,7 +189,7 @@ pub fn run(req: &RenderRequest) -> Result<RenderOutcome> {
             ));
             render_with(req, &scene, host)
         }
-        (outcome, _) => outcome,
+        outcome => outcome,
     }
 }
 
@@ -317,4 +346,16 @@ fn render_with(
         device: device.map(|d| d.info.name),
         timings,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::DEFAULT_LIGHT;
+    use crate::render::integrator::Light;
+
+    /// The default light, as the help shows it, is the integrator's default sun exactly.
+    #[test]
+    fn the_default_light_is_the_default_sun() {
+        assert_eq!(DEFAULT_LIGHT.parse::<Light>(), Ok(Light::default_sun()));
+    }
 }

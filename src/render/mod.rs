@@ -12,7 +12,7 @@ use bytemuck::{Pod, Zeroable};
 use serde::Deserialize;
 
 /// How rays find their closest hit.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
     /// Every ray against every triangle, on the host (rayon over rows).
@@ -42,6 +42,16 @@ impl Method {
         }
     }
 
+    /// One line on the method, for `--help`.
+    pub fn about(self) -> &'static str {
+        match self {
+            Method::CpuBrute => "Every ray against every triangle, on the host (rayon over rows)",
+            Method::CpuBvh => "BVH traversal on the host (rayon over rows)",
+            Method::ClBrute => "Every ray against every triangle, in an OpenCL kernel",
+            Method::ClBvh => "BVH traversal in an OpenCL kernel",
+        }
+    }
+
     pub fn uses_opencl(self) -> bool {
         matches!(self, Method::ClBrute | Method::ClBvh)
     }
@@ -52,7 +62,7 @@ impl Method {
 }
 
 /// How a hit becomes a colour. Misses are black.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Shade {
     /// The geometric normal (by winding), mapped from [-1, 1] to [0, 1] per channel.
@@ -70,7 +80,33 @@ pub enum Shade {
     Path,
 }
 
+impl std::str::FromStr for Method {
+    type Err = String;
+
+    /// The method [`Method::name`] names.
+    fn from_str(s: &str) -> Result<Self, String> {
+        Method::ALL
+            .into_iter()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| {
+                format!(
+                    "`{s}` is not a method: use {}",
+                    Method::ALL.map(Method::name).join(", ")
+                )
+            })
+    }
+}
+
 impl Shade {
+    pub const ALL: [Shade; 6] = [
+        Shade::Normal,
+        Shade::Depth,
+        Shade::Lambert,
+        Shade::Ao,
+        Shade::Shadow,
+        Shade::Path,
+    ];
+
     /// The number the primary-ray kernel uses (`SHADE_*` in cl/cltrace.h); the progressive
     /// modes shade their own samples and are given Lambert for the primary pass.
     pub fn code(self) -> i32 {
@@ -79,11 +115,6 @@ impl Shade {
             Shade::Depth => 1,
             Shade::Lambert | Shade::Ao | Shade::Shadow | Shade::Path => 2,
         }
-    }
-
-    /// Whether the mode accumulates samples (`--spp`) rather than shading one hit.
-    pub fn is_progressive(self) -> bool {
-        matches!(self, Shade::Ao | Shade::Shadow | Shade::Path)
     }
 
     pub fn name(self) -> &'static str {
@@ -95,6 +126,47 @@ impl Shade {
             Shade::Shadow => "shadow",
             Shade::Path => "path",
         }
+    }
+
+    /// One line on the mode, for `--help`.
+    pub fn about(self) -> &'static str {
+        match self {
+            Shade::Normal => {
+                "The geometric normal (by winding), mapped from [-1, 1] to [0, 1] per channel"
+            }
+            Shade::Depth => {
+                "Distance: white at the nearest point of the scene's bounding sphere, black at \
+                 the farthest"
+            }
+            Shade::Lambert => {
+                "A two-sided headlight: |cos| between the geometric normal and the ray"
+            }
+            Shade::Ao => {
+                "Ambient occlusion: the unoccluded share of cosine-weighted rays (`--ao-samples`, \
+                 `--ao-distance`)"
+            }
+            Shade::Shadow => "The albedo under one light (`--light`) with hard shadows",
+            Shade::Path => {
+                "Diffuse path tracing: light from emitting materials, or a sky where there are none"
+            }
+        }
+    }
+}
+
+impl std::str::FromStr for Shade {
+    type Err = String;
+
+    /// The mode [`Shade::name`] names.
+    fn from_str(s: &str) -> Result<Self, String> {
+        Shade::ALL
+            .into_iter()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| {
+                format!(
+                    "`{s}` is not a shade mode: use {}",
+                    Shade::ALL.map(Shade::name).join(", ")
+                )
+            })
     }
 }
 

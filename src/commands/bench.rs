@@ -1,0 +1,50 @@
+//! `cltrace bench`: the benchmark matrix ([`crate::bench`]) as a Markdown table on stdout,
+//! and, if asked, as CSV, JSON and (for the scaling study) a plot.
+
+use std::path::PathBuf;
+
+use crate::bench::{self, BenchRequest};
+use crate::error::Result;
+use crate::output::check_folder;
+
+/// Everything `cltrace bench` was asked to do.
+#[derive(Clone, Debug)]
+pub struct BenchCommand {
+    /// What to measure; with `scaling`, the base of the scaling study's request.
+    pub request: BenchRequest,
+    /// Measure the BVH methods on generated hillsides of growing size instead of the scenes.
+    pub scaling: bool,
+    /// Also write the rows as CSV here.
+    pub csv: Option<PathBuf>,
+    /// Also write the rows as JSON here.
+    pub json: Option<PathBuf>,
+    /// With `scaling`, also draw the scaling plot (PNG) here.
+    pub plot: Option<PathBuf>,
+}
+
+/// Runs the benchmark, prints its table and writes the files asked for. Every output
+/// folder is checked before anything is measured.
+pub fn bench(cmd: &BenchCommand) -> Result<()> {
+    for path in [&cmd.csv, &cmd.json, &cmd.plot].into_iter().flatten() {
+        check_folder(path)?;
+    }
+    let rows = if cmd.scaling {
+        let rows = bench::run(&bench::scaling_request(&cmd.request))?;
+        print!("{}", bench::scaling_table(&rows));
+        if let Some(plot) = &cmd.plot {
+            bench::plot_scaling(&rows, plot)?;
+        }
+        rows
+    } else {
+        let rows = bench::run(&cmd.request)?;
+        print!("{}", bench::markdown(&rows));
+        rows
+    };
+    if let Some(csv) = &cmd.csv {
+        bench::write_csv(&rows, csv)?;
+    }
+    if let Some(json) = &cmd.json {
+        bench::write_json(&rows, json)?;
+    }
+    Ok(())
+}

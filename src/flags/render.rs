@@ -1,0 +1,286 @@
+//! `cltrace render`'s flags. The camera and render settings are the scene file's
+//! ([`CameraSettings`], [`RenderSettings`]), flag for key; each group maps into its
+//! settings struct in one place (the `From` impls below), and the help of each setting is
+//! built from the default and limits the render applies ([`help`]).
+
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+
+use cltrace::bvh::Layout;
+use cltrace::camera::CameraSettings;
+use cltrace::commands::render::RenderRequest;
+use cltrace::input::scene_file::RenderSettings;
+use cltrace::render::{Method, Shade};
+use cltrace::report::Verbosity;
+
+use super::build::BuildArgs;
+use super::values::{choice, parse_vec3};
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// A scene file (.toml) or a mesh (.obj, .obj.gz, .ply, .ply.gz); the built-in default
+    /// scene when omitted. Flags override the scene file's settings.
+    scene: Option<PathBuf>,
+
+    /// Output image; the format follows the extension: png, bmp, ppm, jpg
+    #[arg(short, long, default_value = "render.png")]
+    output: PathBuf,
+
+    #[command(flatten)]
+    camera: CameraArgs,
+
+    /// OpenCL device: `P:D` index (see `cltrace devices`), `gpu`, `cpu`, or part of its
+    /// name [default: the first GPU, else the first device]
+    #[arg(long, env = "CLTRACE_DEVICE")]
+    device: Option<String>,
+
+    #[command(flatten)]
+    settings: SettingsArgs,
+
+    /// Also write the raw per-pixel hit records here (8 bytes a pixel: u32 triangle, f32 distance)
+    #[arg(long, value_name = "FILE")]
+    hits: Option<PathBuf>,
+
+    #[command(flatten)]
+    build: BuildArgs,
+
+    /// If the OpenCL device fails (none found, kernel build, out of memory, lost), render on
+    /// the host instead of stopping with the error
+    #[arg(long, value_enum, value_name = "WHERE")]
+    fallback: Option<Fallback>,
+
+    /// Print nothing but errors
+    #[arg(short, long, conflicts_with = "verbose")]
+    quiet: bool,
+
+    /// Also print mesh, camera, device and BVH details
+    #[arg(short, long)]
+    verbose: bool,
+}
+
+/// Where `--fallback` sends a render whose OpenCL device fails: one place for now, named so
+/// that the flag reads `--fallback cpu`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Fallback {
+    /// The same method on the host: cl-bvh becomes cpu-bvh, cl-brute cpu-brute.
+    Cpu,
+}
+
+/// The scene file's `[camera]` keys, as flags.
+#[derive(Args)]
+struct CameraArgs {
+    #[arg(long, help = help::width())]
+    width: Option<u32>,
+
+    #[arg(long, help = help::height())]
+    height: Option<u32>,
+
+    #[arg(long, help = help::fov())]
+    fov: Option<f32>,
+
+    /// Eye position `x,y,z` [default: auto framing, in front of the mesh along +z]
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    eye: Option<[f32; 3]>,
+
+    /// Point to look at `x,y,z` [default: centre of the mesh's bounding box]
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    look_at: Option<[f32; 3]>,
+
+    /// Up direction `x,y,z` [default: 0,1,0]
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    up: Option<[f32; 3]>,
+}
+
+impl From<CameraArgs> for CameraSettings {
+    fn from(a: CameraArgs) -> CameraSettings {
+        CameraSettings {
+            eye: a.eye,
+            look_at: a.look_at,
+            up: a.up,
+            fov: a.fov,
+            width: a.width,
+            height: a.height,
+        }
+    }
+}
+
+/// The scene file's `[render]` keys, as flags.
+#[derive(Args)]
+struct SettingsArgs {
+    #[arg(long, value_parser = choice::<Method>(), help = help::method())]
+    method: Option<Method>,
+
+    #[arg(long, value_parser = choice::<Layout>(), help = help::layout())]
+    layout: Option<Layout>,
+
+    #[arg(long, value_parser = choice::<Shade>(), help = help::shade())]
+    shade: Option<Shade>,
+
+    #[arg(long, help = help::spp())]
+    spp: Option<u32>,
+
+    #[arg(long, help = help::seed())]
+    seed: Option<u32>,
+
+    #[arg(long, help = help::ao_samples())]
+    ao_samples: Option<u32>,
+
+    #[arg(long, help = help::ao_distance())]
+    ao_distance: Option<f32>,
+
+    #[arg(long, help = help::max_bounces())]
+    max_bounces: Option<u32>,
+
+    #[arg(long, allow_hyphen_values = true, help = help::light())]
+    light: Option<String>,
+}
+
+impl From<SettingsArgs> for RenderSettings {
+    fn from(a: SettingsArgs) -> RenderSettings {
+        RenderSettings {
+            method: a.method,
+            layout: a.layout,
+            shade: a.shade,
+            spp: a.spp,
+            seed: a.seed,
+            ao_samples: a.ao_samples,
+            ao_distance: a.ao_distance,
+            max_bounces: a.max_bounces,
+            light: a.light,
+        }
+    }
+}
+
+impl RenderArgs {
+    pub fn request(self) -> RenderRequest {
+        RenderRequest {
+            scene: self.scene,
+            camera: self.camera.into(),
+            render: self.settings.into(),
+            output: self.output,
+            hits: self.hits,
+            device: self.device,
+            build: self.build.options(),
+            fallback_to_cpu: self.fallback == Some(Fallback::Cpu),
+            tune_cache: cltrace::tune::cache_path(),
+            verbosity: Verbosity::from_flags(self.quiet, self.verbose),
+        }
+    }
+}
+
+/// The help of the settings a scene file can also give, with the defaults and limits that
+/// apply when neither does.
+mod help {
+    use std::fmt::Display;
+
+    use cltrace::camera::{AUTO_FOV, DEFAULT_HEIGHT, DEFAULT_WIDTH, MAX_RESOLUTION};
+    use cltrace::commands::render::{
+        AO_DISTANCE_SHARE, DEFAULT_AO_SAMPLES, DEFAULT_LIGHT, DEFAULT_MAX_BOUNCES, DEFAULT_METHOD,
+        DEFAULT_SEED, DEFAULT_SHADE, DEFAULT_SPP, MAX_AO_SAMPLES, MAX_BOUNCES, MAX_SPP,
+    };
+
+    /// `[default: scene's, else X]`.
+    fn or_scene(default: impl Display) -> String {
+        format!("[default: scene's, else {default}]")
+    }
+
+    pub fn width() -> String {
+        format!(
+            "Image width in pixels (1 to {MAX_RESOLUTION}) {}",
+            or_scene(DEFAULT_WIDTH)
+        )
+    }
+
+    pub fn height() -> String {
+        format!(
+            "Image height in pixels (1 to {MAX_RESOLUTION}) {}",
+            or_scene(DEFAULT_HEIGHT)
+        )
+    }
+
+    pub fn fov() -> String {
+        format!(
+            "Vertical field of view in degrees, in (0, 180) {}",
+            or_scene(AUTO_FOV)
+        )
+    }
+
+    pub fn method() -> String {
+        format!(
+            "How rays find their closest hit {}",
+            or_scene(DEFAULT_METHOD.name())
+        )
+    }
+
+    pub fn layout() -> String {
+        format!(
+            "BVH node layout of cl-bvh {}",
+            // As `cltrace::device::default_layout` picks when nothing was tuned.
+            or_scene(
+                "the one `cltrace tune` found for the device, else wide8 on CPUs and bin64 \
+                 on other devices"
+            )
+        )
+    }
+
+    pub fn shade() -> String {
+        format!(
+            "How hits are coloured {}; ao, shadow and path accumulate samples (--spp) and trace \
+             secondary rays",
+            or_scene(DEFAULT_SHADE.name())
+        )
+    }
+
+    pub fn spp() -> String {
+        let defaults = DEFAULT_SPP
+            .iter()
+            .map(|(shade, spp)| format!("{spp} for {}", shade.name()))
+            .collect::<Vec<_>>()
+            .join(", ");
+        format!(
+            "Samples per pixel for ao, shadow and path, 1 to {MAX_SPP} {}; Ctrl-C stops early \
+             and writes what accumulated",
+            or_scene(defaults)
+        )
+    }
+
+    pub fn seed() -> String {
+        format!(
+            "Seed of the random numbers: the same command on the same device gives the same \
+             image {}",
+            or_scene(DEFAULT_SEED)
+        )
+    }
+
+    pub fn ao_samples() -> String {
+        format!(
+            "Ambient occlusion rays per sample, 1 to {MAX_AO_SAMPLES} {}",
+            or_scene(DEFAULT_AO_SAMPLES)
+        )
+    }
+
+    pub fn ao_distance() -> String {
+        format!(
+            "How far ambient occlusion rays reach, in scene units {}",
+            or_scene(format_args!(
+                "{AO_DISTANCE_SHARE} of the scene's bounding radius"
+            ))
+        )
+    }
+
+    pub fn max_bounces() -> String {
+        format!(
+            "Bounces of the path tracer, 0 to {MAX_BOUNCES} {}",
+            or_scene(DEFAULT_MAX_BOUNCES)
+        )
+    }
+
+    pub fn light() -> String {
+        format!(
+            "The light of --shade shadow: `sun:x,y,z` (the direction towards it) or \
+             `point:x,y,z` (its position) {}",
+            or_scene(DEFAULT_LIGHT)
+        )
+    }
+}

@@ -1,0 +1,125 @@
+//! Parsers of flag values: the library's enums as possible values, vectors, resolutions,
+//! device lists.
+
+use std::ffi::OsStr;
+use std::marker::PhantomData;
+use std::str::FromStr;
+
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+
+use cltrace::bench::RayKind;
+use cltrace::bvh::{Builder, Layout};
+use cltrace::render::{Method, Shade};
+
+/// A library enum a flag chooses among: every value, its name on the command line (which
+/// its `FromStr` reads back) and a line on it for `--help`.
+pub trait Choice: Copy + FromStr<Err = String> + Send + Sync + 'static {
+    const ALL: &'static [Self];
+    fn name(self) -> &'static str;
+    fn about(self) -> &'static str;
+}
+
+macro_rules! choices {
+    ($($t:ty),* $(,)?) => {$(
+        impl Choice for $t {
+            const ALL: &'static [Self] = &<$t>::ALL;
+            fn name(self) -> &'static str {
+                <$t>::name(self)
+            }
+            fn about(self) -> &'static str {
+                <$t>::about(self)
+            }
+        }
+    )*};
+}
+
+choices!(Builder, Layout, Method, Shade, RayKind);
+
+/// The value parser of a [`Choice`]: `--help` lists the names with their lines, and a value
+/// that is none of them (or not UTF-8) is an "invalid value" error listing them, as for a
+/// clap `ValueEnum`.
+pub fn choice<T: Choice>() -> ChoiceParser<T> {
+    ChoiceParser(PhantomData)
+}
+
+pub struct ChoiceParser<T>(PhantomData<fn() -> T>);
+
+impl<T> Clone for ChoiceParser<T> {
+    fn clone(&self) -> Self {
+        ChoiceParser(PhantomData)
+    }
+}
+
+impl<T: Choice> ChoiceParser<T> {
+    fn possible() -> impl Iterator<Item = PossibleValue> {
+        T::ALL
+            .iter()
+            .map(|v| PossibleValue::new(v.name()).help(v.about()))
+    }
+}
+
+impl<T: Choice> TypedValueParser for ChoiceParser<T> {
+    type Value = T;
+
+    fn parse_ref(
+        &self,
+        cmd: &clap::Command,
+        arg: Option<&clap::Arg>,
+        value: &OsStr,
+    ) -> Result<T, clap::Error> {
+        // Not UTF-8: the lossy form (which no name matches) makes the same error as any
+        // other unknown value.
+        let value = value.to_string_lossy();
+        let name = PossibleValuesParser::new(Self::possible()).parse_ref(
+            cmd,
+            arg,
+            OsStr::new(value.as_ref()),
+        )?;
+        Ok(name.parse().expect("every possible value names one"))
+    }
+
+    fn possible_values(&self) -> Option<Box<dyn Iterator<Item = PossibleValue> + '_>> {
+        Some(Box::new(Self::possible()))
+    }
+}
+
+/// The names of every value, comma-separated: the default of a flag that takes a list.
+pub fn all_names<T: Choice>() -> String {
+    T::ALL
+        .iter()
+        .map(|v| v.name())
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// `x,y,z`: three finite numbers.
+pub fn parse_vec3(s: &str) -> Result<[f32; 3], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let numbers: Vec<f32> = parts
+        .iter()
+        .map(|p| p.parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("`{s}` is not three numbers `x,y,z`"))?;
+    match numbers.as_slice() {
+        [x, y, z] if numbers.iter().all(|v| v.is_finite()) => Ok([*x, *y, *z]),
+        _ => Err(format!("`{s}` is not three finite numbers `x,y,z`")),
+    }
+}
+
+/// `WIDTHxHEIGHT` (or `WIDTHXHEIGHT`).
+pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("`{s}` is not a resolution `WIDTHxHEIGHT`"))?;
+    match (w.trim().parse(), h.trim().parse()) {
+        (Ok(w), Ok(h)) => Ok((w, h)),
+        _ => Err(format!("`{s}` is not a resolution `WIDTHxHEIGHT`")),
+    }
+}
+
+/// `--devices`: `all` (any case) is `None`, every device; otherwise the comma-separated
+/// selectors, each trimmed.
+pub fn device_list(flag: &str) -> Option<Vec<String>> {
+    (!flag.trim().eq_ignore_ascii_case("all"))
+        .then(|| flag.split(',').map(|s| s.trim().to_string()).collect())
+}
