@@ -54,15 +54,10 @@ impl Layout {
         }
     }
 
-    /// The kernels' `LAYOUT` define.
-    pub fn code(self) -> u32 {
-        match self {
-            Layout::Bin32 => 32,
-            Layout::Bin64 => 64,
-            Layout::Wide4 => 4,
-            Layout::Wide8 => 8,
-            Layout::Cwbvh => 80,
-        }
+    /// The define its kernel program is built with, `LAYOUT_` and the name in capitals:
+    /// the layout's kernel file, `cl/` and the name, refuses to compile without it.
+    pub fn define(self) -> String {
+        format!("LAYOUT_{}", self.name().to_ascii_uppercase())
     }
 }
 

@@ -6,8 +6,8 @@ mod program;
 pub mod tracer;
 
 pub use pitched::PitchedBuffer;
-pub use program::KernelSource;
-pub use tracer::ClTracer;
+pub use program::{Constant, Program, shared_constants};
+pub use tracer::{ClTracer, Kernel};
 
 use std::fmt;
 use std::str::FromStr;
