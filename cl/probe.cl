@@ -1,18 +1,18 @@
-/* probe.cl: reports how this device's compiler lays out the shared structs, so that
- * tests/layout.rs can compare them with the Rust side. */
-#include "cltrace.h"
+/* probe.cl: reports how this device's compiler lays out the shared structs and sees the
+ * constants the host writes in front of every program, so that tests/layout.rs can compare
+ * them with the Rust side. Its program is common.cl, nodes.cl (every struct) and this. */
 
 #define OFFSET(type, field) ((uint)((const char*)&probe_##type.field - (const char*)&probe_##type))
 
 __kernel void probe_layout(__global uint* out) {
     Triangle probe_Triangle;
-    BvhNode probe_BvhNode;
+    Bin32Node probe_Bin32Node;
     Hit probe_Hit;
     Material probe_Material;
-    Bvh64Node probe_Bvh64Node;
+    Bin64Node probe_Bin64Node;
     Wide4Node probe_Wide4Node;
     Wide8Node probe_Wide8Node;
-    CompressedNode probe_CompressedNode;
+    CwbvhNode probe_CwbvhNode;
     uint i = 0;
     out[i++] = sizeof(Triangle);
     out[i++] = OFFSET(Triangle, v0);
@@ -20,21 +20,21 @@ __kernel void probe_layout(__global uint* out) {
     out[i++] = OFFSET(Triangle, v1);
     out[i++] = OFFSET(Triangle, material);
     out[i++] = OFFSET(Triangle, v2);
-    out[i++] = sizeof(BvhNode);
-    out[i++] = OFFSET(BvhNode, min);
-    out[i++] = OFFSET(BvhNode, left_or_first);
-    out[i++] = OFFSET(BvhNode, max);
-    out[i++] = OFFSET(BvhNode, right_or_count);
+    out[i++] = sizeof(Bin32Node);
+    out[i++] = OFFSET(Bin32Node, min);
+    out[i++] = OFFSET(Bin32Node, left_or_first);
+    out[i++] = OFFSET(Bin32Node, max);
+    out[i++] = OFFSET(Bin32Node, right_or_count);
     out[i++] = sizeof(Hit);
     out[i++] = OFFSET(Hit, prim);
     out[i++] = OFFSET(Hit, t);
     out[i++] = sizeof(Material);
     out[i++] = OFFSET(Material, albedo);
     out[i++] = OFFSET(Material, emission);
-    out[i++] = sizeof(Bvh64Node);
-    out[i++] = OFFSET(Bvh64Node, right_xy);
-    out[i++] = OFFSET(Bvh64Node, z);
-    out[i++] = OFFSET(Bvh64Node, refs);
+    out[i++] = sizeof(Bin64Node);
+    out[i++] = OFFSET(Bin64Node, right_xy);
+    out[i++] = OFFSET(Bin64Node, z);
+    out[i++] = OFFSET(Bin64Node, refs);
     out[i++] = sizeof(Wide4Node);
     out[i++] = OFFSET(Wide4Node, max_z);
     out[i++] = OFFSET(Wide4Node, child);
@@ -43,13 +43,30 @@ __kernel void probe_layout(__global uint* out) {
     out[i++] = OFFSET(Wide8Node, max_z);
     out[i++] = OFFSET(Wide8Node, child);
     out[i++] = OFFSET(Wide8Node, count);
-    out[i++] = sizeof(CompressedNode);
-    out[i++] = OFFSET(CompressedNode, exponent);
-    out[i++] = OFFSET(CompressedNode, inner_mask);
-    out[i++] = OFFSET(CompressedNode, child_base);
-    out[i++] = OFFSET(CompressedNode, triangle_base);
-    out[i++] = OFFSET(CompressedNode, meta);
-    out[i++] = OFFSET(CompressedNode, lo_x);
-    out[i++] = OFFSET(CompressedNode, hi_x);
-    out[i++] = OFFSET(CompressedNode, hi_z);
+    out[i++] = sizeof(CwbvhNode);
+    out[i++] = OFFSET(CwbvhNode, exponent);
+    out[i++] = OFFSET(CwbvhNode, inner_mask);
+    out[i++] = OFFSET(CwbvhNode, child_base);
+    out[i++] = OFFSET(CwbvhNode, triangle_base);
+    out[i++] = OFFSET(CwbvhNode, meta);
+    out[i++] = OFFSET(CwbvhNode, lo_x);
+    out[i++] = OFFSET(CwbvhNode, hi_x);
+    out[i++] = OFFSET(CwbvhNode, hi_z);
+}
+
+/* The constants the host defines in front of every program, in the order tests/layout.rs
+ * lists them: integers as uint, floats by their bits. */
+__kernel void probe_constants(__global uint* out) {
+    uint i = 0;
+    out[i++] = MISS;
+    out[i++] = LEAF_FLAG;
+    out[i++] = EMPTY_SLOT;
+    out[i++] = STATUS_STACK_OVERFLOW;
+    out[i++] = (uint)SHADE_NORMAL;
+    out[i++] = (uint)SHADE_DEPTH;
+    out[i++] = (uint)SHADE_LAMBERT;
+    out[i++] = DIMS_PER_BOUNCE;
+    out[i++] = as_uint(SHADOW_AMBIENT);
+    out[i++] = ROULETTE_AFTER;
+    out[i++] = as_uint(ROBUST_EXIT);
 }

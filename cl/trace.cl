@@ -1,7 +1,8 @@
-/* trace.cl: the closest-hit kernels, compiled once against the BVH (cl-bvh, with
- * STACK_SIZE defined) and once against the plain triangle list (cl-brute): the thesis's
- * GPU brute force and GPU SAH-BVH stages from one source. */
-#include "cltrace.h"
+/* trace.cl: the closest-hit kernels, compiled against a BVH in one layout (cl-bvh) or the
+ * plain triangle list (cl-brute), whichever scene file the program has before this one:
+ * the thesis's GPU brute force and GPU SAH-BVH stages from one source. Their frames are
+ * compared pixel by pixel with the host's (src/render/cpu.rs). The host binds their
+ * parameters by name (src/device/tracer.rs; tests/layout.rs compares the two lists). */
 
 /* One primary ray per pixel of the band [row0, row_end), written to pitched images whose
  * row 0 is image row row0. */

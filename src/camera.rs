@@ -9,12 +9,12 @@ use crate::error::{Error, Result};
 use crate::geometry::{Aabb, Ray};
 
 /// Largest width or height accepted.
-pub(crate) const MAX_RESOLUTION: u32 = 16384;
+pub const MAX_RESOLUTION: u32 = 16384;
 /// Field of view of the auto framing, degrees.
-pub(crate) const AUTO_FOV: f32 = 45.0;
+pub const AUTO_FOV: f32 = 45.0;
 /// Resolution when neither the scene nor the flags give one.
-pub(crate) const DEFAULT_WIDTH: u32 = 1280;
-pub(crate) const DEFAULT_HEIGHT: u32 = 720;
+pub const DEFAULT_WIDTH: u32 = 1280;
+pub const DEFAULT_HEIGHT: u32 = 720;
 
 /// Camera settings; `None` means "not said here" (a later layer or the auto framing decides).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]

@@ -170,7 +170,7 @@ impl WatertightRay {
 /// Widens a box's exit distance so that rounding in the slab test never culls a box the
 /// ray touches: 1 + 2 gamma(3) (Ize, "Robust BVH Ray Traversal", JCGT 2013), which in f32
 /// is exactly 1 + 3 ulp.
-pub(crate) const ROBUST_EXIT: f32 = 1.0 + 3.0 * f32::EPSILON;
+pub const ROBUST_EXIT: f32 = 1.0 + 3.0 * f32::EPSILON;
 
 /// Per-ray constants of the slab test, with each slab's near and far planes picked by the
 /// sign of the direction (not by comparing distances, so that a NaN never stands in for

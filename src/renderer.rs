@@ -29,9 +29,9 @@ pub struct Renderer<'d> {
     /// The emitting triangles, as indices into the tracer's triangle order.
     emitters: Emitters,
     /// The BVH's statistics, for the BVH methods.
-    pub bvh: Option<BvhStats>,
+    pub(crate) bvh: Option<BvhStats>,
     /// Bytes of scene data the tracer reads (triangles, and nodes for a BVH).
-    pub scene_bytes: usize,
+    pub(crate) scene_bytes: usize,
 }
 
 enum Tracer<'d> {
@@ -60,9 +60,9 @@ pub struct PrepareOptions {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct TraceTimes {
     /// Device time of the kernel launches (OpenCL) or wall time of the trace (CPU), ms.
-    pub trace_ms: f64,
+    pub(crate) trace_ms: f64,
     /// Host wall time of reading results back (OpenCL only), ms.
-    pub read_back_ms: f64,
+    pub(crate) read_back_ms: f64,
 }
 
 impl<'d> Renderer<'d> {
@@ -168,7 +168,7 @@ impl<'d> Renderer<'d> {
     }
 
     /// Traces one frame of primary rays. With `progress`, a long render shows a bar.
-    pub fn render(
+    pub(crate) fn render(
         &mut self,
         camera: &Camera,
         shade: &ShadeParams,
@@ -288,7 +288,7 @@ impl<'d> Renderer<'d> {
     }
 
     /// Sets the OpenCL kernels' work-group shape (ignored by the host methods).
-    pub fn set_work_group(&mut self, shape: [usize; 2]) -> Result<()> {
+    pub(crate) fn set_work_group(&mut self, shape: [usize; 2]) -> Result<()> {
         match &mut self.tracer {
             Tracer::Cl(t) => t.set_work_group(shape),
             _ => Ok(()),
@@ -297,7 +297,7 @@ impl<'d> Renderer<'d> {
 
     /// Traces arbitrary rays (closest hits in `(0, t_max)`, or any hits), as the bench's
     /// secondary ray kinds do.
-    pub fn trace_rays(
+    pub(crate) fn trace_rays(
         &mut self,
         rays: &[Ray],
         t_max: f32,

@@ -27,20 +27,20 @@ impl Verbosity {
     }
 
     /// Prints a line at normal verbosity and above.
-    pub fn say(self, line: impl AsRef<str>) {
+    pub(crate) fn say(self, line: impl AsRef<str>) {
         if self >= Verbosity::Normal {
             eprintln!("{}", line.as_ref());
         }
     }
 
     /// Prints a line with `--verbose` only.
-    pub fn detail(self, line: impl AsRef<str>) {
+    pub(crate) fn detail(self, line: impl AsRef<str>) {
         if self >= Verbosity::Verbose {
             eprintln!("{}", line.as_ref());
         }
     }
 
-    pub fn progress(self) -> bool {
+    pub(crate) fn progress(self) -> bool {
         self >= Verbosity::Normal
     }
 }
@@ -53,7 +53,7 @@ pub struct Timings {
 
 impl Timings {
     /// Runs `f`, recording its wall time under `stage`.
-    pub fn time<T>(&mut self, stage: &'static str, f: impl FnOnce() -> T) -> T {
+    pub(crate) fn time<T>(&mut self, stage: &'static str, f: impl FnOnce() -> T) -> T {
         let start = Instant::now();
         let out = f();
         self.add(stage, start.elapsed().as_secs_f64() * 1e3);
@@ -61,14 +61,14 @@ impl Timings {
     }
 
     /// Adds `ms` to `stage` (created at the end if new).
-    pub fn add(&mut self, stage: &'static str, ms: f64) {
+    pub(crate) fn add(&mut self, stage: &'static str, ms: f64) {
         match self.stages.iter_mut().find(|(s, _)| *s == stage) {
             Some((_, total)) => *total += ms,
             None => self.stages.push((stage, ms)),
         }
     }
 
-    pub fn get(&self, stage: &str) -> Option<f64> {
+    pub(crate) fn get(&self, stage: &str) -> Option<f64> {
         self.stages
             .iter()
             .find(|(s, _)| *s == stage)
@@ -76,7 +76,7 @@ impl Timings {
     }
 
     /// `load 12.3 ms, build 4.0 ms, ...`
-    pub fn summary(&self) -> String {
+    pub(crate) fn summary(&self) -> String {
         self.stages
             .iter()
             .map(|(s, ms)| format!("{s} {}", format_ms(*ms)))
@@ -86,7 +86,7 @@ impl Timings {
 }
 
 /// Milliseconds with three significant digits, e.g. `0.0412 ms`, `3.14 ms`, `2718 ms`.
-pub fn format_ms(ms: f64) -> String {
+pub(crate) fn format_ms(ms: f64) -> String {
     if ms >= 100.0 {
         format!("{ms:.0} ms")
     } else if ms >= 10.0 {

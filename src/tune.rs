@@ -40,7 +40,7 @@ pub struct Tuning {
     pub primary_mrays: f64,
     pub diffuse_mrays: f64,
     /// The scene it was measured on.
-    pub scene: String,
+    pub(crate) scene: String,
 }
 
 /// The tuning cache: `CLTRACE_TUNE_CACHE`, else `$XDG_CACHE_HOME/cltrace/tune.toml`, else
@@ -59,7 +59,7 @@ pub fn cache_path() -> Option<PathBuf> {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(transparent)]
 pub struct TuneCache {
-    pub devices: BTreeMap<String, Tuning>,
+    pub(crate) devices: BTreeMap<String, Tuning>,
 }
 
 impl TuneCache {
@@ -72,7 +72,7 @@ impl TuneCache {
             .unwrap_or_default()
     }
 
-    pub fn save(&self, path: &Path) -> Result<()> {
+    pub(crate) fn save(&self, path: &Path) -> Result<()> {
         if let Some(folder) = path.parent() {
             std::fs::create_dir_all(folder).map_err(|e| Error::output(path, e))?;
         }
@@ -95,16 +95,16 @@ impl TuneCache {
 
 /// One measured combination.
 #[derive(Clone, Debug, PartialEq)]
-pub struct TuneResult {
-    pub layout: Layout,
-    pub work_group: [usize; 2],
-    pub primary_mrays: f64,
-    pub diffuse_mrays: f64,
+pub(crate) struct TuneResult {
+    pub(crate) layout: Layout,
+    pub(crate) work_group: [usize; 2],
+    pub(crate) primary_mrays: f64,
+    pub(crate) diffuse_mrays: f64,
 }
 
 impl TuneResult {
     /// The score the best is chosen by: the geometric mean of both ray kinds' speeds.
-    pub fn score(&self) -> f64 {
+    pub(crate) fn score(&self) -> f64 {
         (self.primary_mrays * self.diffuse_mrays).sqrt()
     }
 }
@@ -112,7 +112,7 @@ impl TuneResult {
 /// Measures every layout and work-group shape on `device` (1920x1080, auto framing, primary
 /// and diffuse rays, median of `repetitions` frames after a warm-up) and returns them all,
 /// best first. `on_result` sees each as it is measured.
-pub fn tune_device(
+pub(crate) fn tune_device(
     device: &ClDevice,
     mesh: &Mesh,
     repetitions: u32,

@@ -1,18 +1,51 @@
-//! The structs shared with the kernels have the same size and field offsets on the host
-//! and on the device: `probe.cl` reports the device compiler's layout.
+//! What the host and the kernels share agrees on both sides: the structs have the same
+//! size and field offsets, the constants the same values (`probe.cl` reports both as the
+//! device compiler sees them), and every kernel's parameters the names and order the host
+//! binds them by. A program is for one scene: a tracer refuses a program of another.
 
 use crate::common;
 
 use std::mem::{offset_of, size_of};
+use std::sync::atomic::AtomicBool;
 
-use cltrace::bvh::Bin32Node;
 use cltrace::bvh::bin64::Bin64Node;
 use cltrace::bvh::cwbvh::CwbvhNode;
+use cltrace::bvh::{Bin32Bvh, Bin32Node, BuildOptions, Bvh, DeviceLayout, Layout};
 use cltrace::bvh::{wide4::Wide4Node, wide8::Wide8Node};
-use cltrace::device::KernelSource;
-use cltrace::intersect::Triangle;
+use cltrace::device::tracer::STATUS_STACK_OVERFLOW;
+use cltrace::device::{ClDevice, ClTracer, Kernel, shared_constants};
+use cltrace::input::generate::Generator;
+use cltrace::intersect::{ROBUST_EXIT, Triangle};
 use cltrace::material::Material;
-use cltrace::render::Hit;
+use cltrace::render::integrator::{
+    Accumulation, Lighting, ROULETTE_AFTER, SHADOW_AMBIENT, SampleSettings,
+};
+use cltrace::render::sampling::DIMS_PER_BOUNCE;
+use cltrace::render::{Hit, MISS, Shade};
+use ocl::core::{KernelArgInfo, KernelArgInfoResult, KernelInfo, KernelInfoResult};
+
+/// Runs the one-work-item probe kernel `name`, which writes `len` numbers.
+fn probe(device: &ClDevice, name: &str, len: usize) -> Vec<u32> {
+    let program = device.compile_probe().unwrap();
+    let out = ocl::Buffer::<u32>::builder()
+        .queue(device.queue.clone())
+        .len(len)
+        .fill_val(u32::MAX)
+        .build()
+        .unwrap();
+    let kernel = ocl::Kernel::builder()
+        .program(&program)
+        .name(name)
+        .queue(device.queue.clone())
+        .global_work_size(1)
+        .arg(&out)
+        .build()
+        .unwrap();
+    unsafe { kernel.enq().unwrap() };
+    let mut reported = vec![0u32; len];
+    out.read(&mut reported).enq().unwrap();
+    reported
+}
 
 #[test]
 fn device_structs_match_the_rust_structs() {
@@ -76,25 +109,132 @@ fn device_structs_match_the_rust_structs() {
     assert_eq!(offset_of!(CwbvhNode, lo_x), 32);
 
     let device = common::device();
-    let program = device.build(KernelSource::Probe, &[]).unwrap();
-    let out = ocl::Buffer::<u32>::builder()
-        .queue(device.queue.clone())
-        .len(host.len())
-        .fill_val(u32::MAX)
-        .build()
-        .unwrap();
-    let kernel = ocl::Kernel::builder()
-        .program(&program)
-        .name("probe_layout")
-        .queue(device.queue.clone())
-        .global_work_size(1)
-        .arg(&out)
-        .build()
-        .unwrap();
-    unsafe { kernel.enq().unwrap() };
-    let mut reported = vec![0u32; host.len()];
-    out.read(&mut reported).enq().unwrap();
+    let reported = probe(&device, "probe_layout", host.len());
     for ((what, expected), got) in host.iter().zip(&reported) {
         assert_eq!(*got as usize, *expected, "{what} on {}", device.info.name);
     }
+}
+
+/// Every constant the kernels share with the host is written once, in Rust; the device
+/// compiler sees each with the Rust value (floats to the bit).
+#[test]
+fn device_constants_match_the_rust_constants() {
+    let host: Vec<(&str, u32)> = vec![
+        ("MISS", MISS),
+        ("LEAF_FLAG", cltrace::bvh::LEAF_FLAG),
+        ("EMPTY_SLOT", cltrace::bvh::wide::EMPTY_SLOT),
+        ("STATUS_STACK_OVERFLOW", STATUS_STACK_OVERFLOW),
+        ("SHADE_NORMAL", Shade::Normal.code() as u32),
+        ("SHADE_DEPTH", Shade::Depth.code() as u32),
+        ("SHADE_LAMBERT", Shade::Lambert.code() as u32),
+        ("DIMS_PER_BOUNCE", DIMS_PER_BOUNCE),
+        ("SHADOW_AMBIENT", SHADOW_AMBIENT.to_bits()),
+        ("ROULETTE_AFTER", ROULETTE_AFTER),
+        ("ROBUST_EXIT", ROBUST_EXIT.to_bits()),
+    ];
+    // The probe reports every constant the host defines for the kernels, none left out.
+    let shared: Vec<&str> = shared_constants().iter().map(|c| c.0).collect();
+    let probed: Vec<&str> = host.iter().map(|c| c.0).collect();
+    assert_eq!(shared, probed);
+    // 1 + 3 ulp, and the float nearest 0.1: the values the host reference renders with.
+    assert_eq!(ROBUST_EXIT.to_bits(), 0x3F80_0003);
+    assert_eq!(SHADOW_AMBIENT.to_bits(), 0x3DCC_CCCD);
+
+    let device = common::device();
+    let reported = probe(&device, "probe_constants", host.len());
+    for ((name, expected), got) in host.iter().zip(&reported) {
+        assert_eq!(
+            got, expected,
+            "{name} on {}: {got:#x}, host {expected:#x}",
+            device.info.name
+        );
+    }
+}
+
+/// The host binds every kernel's parameters by name, in order
+/// ([`Kernel::parameters`]); the device compiler's argument info of every kernel of every
+/// program (brute force and each layout, with sampling) has the same names in the same
+/// order.
+#[test]
+fn kernel_parameters_match_the_host_bindings() {
+    let device = common::device();
+    let scenes = std::iter::once(None).chain(Layout::ALL.map(|layout| Some((layout, 8))));
+    for bvh in scenes {
+        let program = device
+            .compile_program(bvh, true, "-cl-kernel-arg-info")
+            .unwrap();
+        for kernel in Kernel::ALL {
+            let k = ocl::core::create_kernel(program.ocl(), kernel.name()).unwrap();
+            let count = match ocl::core::get_kernel_info(&k, KernelInfo::NumArgs).unwrap() {
+                KernelInfoResult::NumArgs(n) => n,
+                other => panic!("{other:?}"),
+            };
+            let names: Vec<String> = (0..count)
+                .map(|i| {
+                    match ocl::core::get_kernel_arg_info(&k, i, KernelArgInfo::Name, None).unwrap()
+                    {
+                        KernelArgInfoResult::Name(name) => name,
+                        other => panic!("{other:?}"),
+                    }
+                })
+                .collect();
+            assert_eq!(
+                names,
+                kernel.parameters(bvh.is_some()),
+                "{} of the {:?} program",
+                kernel.name(),
+                bvh.map(|b| b.0)
+            );
+        }
+    }
+}
+
+/// A program knows the scene it was compiled for: a tracer refuses one of another layout
+/// or of brute force, and a sampling launch from a program compiled without sampling is an
+/// error.
+#[test]
+fn a_tracer_refuses_a_program_compiled_for_another_scene() {
+    let mesh = common::generate(Generator::Sphere { subdivisions: 1 });
+    let bvh = Bvh::build(&mesh, &BuildOptions::default());
+    let sah = bvh.stats().sah_cost;
+    let flat = Bin32Bvh::new(bvh, &mesh);
+    let triangles = flat.triangles.clone();
+    let device = common::device();
+    let refused = |r: cltrace::error::Result<ClTracer>| {
+        let err = r.err().expect("refused").to_string();
+        assert!(err.contains("compiled for"), "{err}");
+    };
+
+    let brute = ClTracer::compile_brute(&device).unwrap();
+    assert_eq!(brute.layout(), None);
+    refused(ClTracer::bvh(&device, &brute, &flat));
+    let bin32 = ClTracer::compile_bvh(&device, flat.depth).unwrap();
+    assert_eq!(bin32.layout(), Some(Layout::Bin32));
+    refused(ClTracer::brute(&device, &bin32, &triangles));
+    let laid = DeviceLayout::new(flat.clone(), Layout::Cwbvh, sah);
+    refused(ClTracer::with_layout(&device, &bin32, &laid));
+    let cwbvh = ClTracer::compile(&device, Some((Layout::Cwbvh, laid.stack_size)), false).unwrap();
+    refused(ClTracer::bvh(&device, &cwbvh, &flat));
+
+    // The right program is taken, but it has no sampling kernels.
+    let mut tracer = ClTracer::with_layout(&device, &cwbvh, &laid).unwrap();
+    assert_eq!(tracer.layout(), Some(Layout::Cwbvh));
+    let camera = common::auto_camera(&mesh, 8, 8);
+    let settings = SampleSettings {
+        lighting: Lighting::Path { max_bounces: 1 },
+        offset: 1e-4,
+        seed: 1,
+    };
+    let err = tracer
+        .render_samples(
+            &camera.pinhole(),
+            &settings,
+            0..1,
+            &mut Accumulation::new(8, 8),
+            &AtomicBool::new(false),
+            &mut |_, _| {},
+        )
+        .expect_err("refused")
+        .to_string();
+    assert!(err.contains("compiled without sampling"), "{err}");
 }

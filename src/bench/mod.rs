@@ -6,8 +6,8 @@
 mod scaling;
 mod table;
 
-pub use scaling::{SCALING_SIZES, plot_scaling, scaling_request, scaling_table};
-pub use table::{markdown, write_csv, write_json};
+pub(crate) use scaling::{plot_scaling, scaling_request, scaling_table};
+pub(crate) use table::{markdown, write_csv, write_json};
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -84,11 +84,11 @@ impl std::str::FromStr for RayKind {
 }
 
 /// Side of the pixel tiles that order the diffuse rays.
-pub const DIFFUSE_TILE: u32 = 16;
+pub(crate) const DIFFUSE_TILE: u32 = 16;
 
 /// The pixels of a `width` x `height` image tile by tile (`tile` x `tile` squares, row by
 /// row within a tile, tiles row by row; the last ones cut at the edges).
-pub fn tile_order(width: u32, height: u32, tile: u32) -> impl Iterator<Item = u32> {
+pub(crate) fn tile_order(width: u32, height: u32, tile: u32) -> impl Iterator<Item = u32> {
     (0..height.div_ceil(tile)).flat_map(move |ty| {
         (0..width.div_ceil(tile)).flat_map(move |tx| {
             let rows = ty * tile..((ty + 1) * tile).min(height);
@@ -105,7 +105,7 @@ pub fn tile_order(width: u32, height: u32, tile: u32) -> impl Iterator<Item = u3
 /// of [`tile_order`], as the render kernels' 2D work-groups trace their bounces: rays from
 /// neighbouring pixels start close together and share the nodes around their origins (on
 /// the H100, 16 x 16 tiles traced 4-8% faster than scanline order; docs/performance.md).
-pub fn diffuse_rays(mesh: &Mesh, camera: &Camera) -> Vec<Ray> {
+pub(crate) fn diffuse_rays(mesh: &Mesh, camera: &Camera) -> Vec<Ray> {
     use crate::intersect::ClosestHit;
     use crate::render::integrator::facing_normal;
     use crate::render::sampling::{Sampler, cosine_direction};
@@ -158,32 +158,32 @@ pub struct BenchRequest {
 
 /// One measured (or skipped) run: the columns of the benchmark protocol's tables.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct BenchRow {
-    pub scene: String,
-    pub triangles: usize,
-    pub width: u32,
-    pub height: u32,
-    pub method: String,
-    pub device: String,
-    pub compute_units: u32,
-    pub ray_kind: String,
-    pub rays: u64,
-    pub load_ms: f64,
+pub(crate) struct BenchRow {
+    pub(crate) scene: String,
+    pub(crate) triangles: usize,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) method: String,
+    pub(crate) device: String,
+    pub(crate) compute_units: u32,
+    pub(crate) ray_kind: String,
+    pub(crate) rays: u64,
+    pub(crate) load_ms: f64,
     /// BVH build time, for the BVH methods.
-    pub build_ms: Option<f64>,
-    pub build_threads: Option<usize>,
+    pub(crate) build_ms: Option<f64>,
+    pub(crate) build_threads: Option<usize>,
     /// Kernel (OpenCL, from profiling events) or trace (CPU, wall) time per frame.
-    pub kernel_ms_median: Option<f64>,
-    pub kernel_ms_min: Option<f64>,
+    pub(crate) kernel_ms_median: Option<f64>,
+    pub(crate) kernel_ms_min: Option<f64>,
     /// Host wall time around each frame (launches, waits, read-back), median.
-    pub wall_ms_median: Option<f64>,
+    pub(crate) wall_ms_median: Option<f64>,
     /// Rays per second of kernel time (median), in millions.
-    pub mrays_per_s: Option<f64>,
-    pub sah_cost: Option<f64>,
+    pub(crate) mrays_per_s: Option<f64>,
+    pub(crate) sah_cost: Option<f64>,
     /// Scene data the tracer reads (triangles, nodes), MB.
-    pub device_mb: f64,
+    pub(crate) device_mb: f64,
     /// Why the run was not measured, e.g. a brute force over the time budget.
-    pub skipped: Option<String>,
+    pub(crate) skipped: Option<String>,
 }
 
 /// A scene to measure: its source and name.
@@ -200,7 +200,7 @@ enum Target {
 
 /// Runs the whole matrix and returns its rows (also printed as they come, with
 /// `--verbose`). A progress bar on stderr counts the runs.
-pub fn run(req: &BenchRequest) -> Result<Vec<BenchRow>> {
+pub(crate) fn run(req: &BenchRequest) -> Result<Vec<BenchRow>> {
     req.build.check()?;
     if req.repetitions == 0 {
         return Err(Error::Invalid("--repetitions must be at least 1".into()));
@@ -567,7 +567,7 @@ fn device_name(device: Option<&ClDevice>) -> String {
 }
 
 /// The host processor's model name, from /proc/cpuinfo where there is one.
-pub fn host_cpu_name() -> String {
+pub(crate) fn host_cpu_name() -> String {
     std::fs::read_to_string("/proc/cpuinfo")
         .ok()
         .and_then(|info| {

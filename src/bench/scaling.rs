@@ -12,11 +12,11 @@ use crate::output::write_atomically;
 use crate::render::Method;
 
 /// The triangle counts measured (a hillside of `2 r^2` triangles comes closest).
-pub const SCALING_SIZES: [u64; 4] = [10_000, 100_000, 1_000_000, 10_000_000];
+pub(crate) const SCALING_SIZES: [u64; 4] = [10_000, 100_000, 1_000_000, 10_000_000];
 
 /// The bench request for the scaling study: the BVH methods at 1920x1080 on hillsides of
 /// each size, everything else as in `base`.
-pub fn scaling_request(base: &BenchRequest) -> BenchRequest {
+pub(crate) fn scaling_request(base: &BenchRequest) -> BenchRequest {
     BenchRequest {
         scenes: Vec::new(),
         scene_folders: Vec::new(),
@@ -40,7 +40,7 @@ pub fn scaling_request(base: &BenchRequest) -> BenchRequest {
 }
 
 /// The scaling rows as a Markdown table: build cost, memory and speed per size.
-pub fn scaling_table(rows: &[BenchRow]) -> String {
+pub(crate) fn scaling_table(rows: &[BenchRow]) -> String {
     let mut out = String::from(
         "| scene | triangles | method | device | build ms | threads | bytes/triangle | SAH cost | Mrays/s |\n|---|---|---|---|---|---|---|---|---|\n",
     );
@@ -62,7 +62,7 @@ pub fn scaling_table(rows: &[BenchRow]) -> String {
 }
 
 /// Draws build time and tracing speed against triangle count (log-log) into a PNG.
-pub fn plot_scaling(rows: &[BenchRow], path: &Path) -> Result<()> {
+pub(crate) fn plot_scaling(rows: &[BenchRow], path: &Path) -> Result<()> {
     let fail =
         |e: &dyn std::fmt::Display| Error::output(path, format!("cannot draw the plot: {e}"));
     let (width, height) = (1400u32, 560u32);

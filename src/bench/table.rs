@@ -68,7 +68,7 @@ pub(super) fn row_line(r: &BenchRow) -> String {
 }
 
 /// The rows as a Markdown table.
-pub fn markdown(rows: &[BenchRow]) -> String {
+pub(crate) fn markdown(rows: &[BenchRow]) -> String {
     let mut out = format!("| {} |\n", HEADER.join(" | "));
     out += &format!("|{}\n", HEADER.iter().map(|_| "---|").collect::<String>());
     for r in rows {
@@ -78,7 +78,7 @@ pub fn markdown(rows: &[BenchRow]) -> String {
 }
 
 /// The rows as CSV, one column per field, written atomically.
-pub fn write_csv(rows: &[BenchRow], path: &Path) -> Result<()> {
+pub(crate) fn write_csv(rows: &[BenchRow], path: &Path) -> Result<()> {
     crate::output::check_folder(path)?;
     write_atomically(path, |w| {
         let mut csv = csv::Writer::from_writer(w);
@@ -90,7 +90,7 @@ pub fn write_csv(rows: &[BenchRow], path: &Path) -> Result<()> {
 }
 
 /// The rows as a JSON array of objects, written atomically.
-pub fn write_json(rows: &[BenchRow], path: &Path) -> Result<()> {
+pub(crate) fn write_json(rows: &[BenchRow], path: &Path) -> Result<()> {
     crate::output::check_folder(path)?;
     write_atomically(path, |w| {
         serde_json::to_writer_pretty(w, rows).map_err(|e| Error::output(path, e))

@@ -59,15 +59,10 @@ impl Layout {
         }
     }
 
-    /// The kernels' `LAYOUT` define.
-    pub fn code(self) -> u32 {
-        match self {
-            Layout::Bin32 => 32,
-            Layout::Bin64 => 64,
-            Layout::Wide4 => 4,
-            Layout::Wide8 => 8,
-            Layout::Cwbvh => 80,
-        }
+    /// The define its kernel program is built with, `LAYOUT_` and the name in capitals:
+    /// the layout's kernel file, `cl/` and the name, refuses to compile without it.
+    pub(crate) fn define(self) -> String {
+        format!("LAYOUT_{}", self.name().to_ascii_uppercase())
     }
 }
 
@@ -92,17 +87,17 @@ impl std::str::FromStr for Layout {
 /// traversal stack the kernels need for it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DeviceLayout {
-    pub layout: Layout,
+    pub(crate) layout: Layout,
     /// The nodes, as the kernels read them.
-    pub nodes: Vec<u8>,
-    pub node_count: usize,
-    pub triangles: Vec<Triangle>,
+    pub(crate) nodes: Vec<u8>,
+    pub(crate) node_count: usize,
+    pub(crate) triangles: Vec<Triangle>,
     /// Entries the traversal stack needs: the depth for binary layouts, (width - 1) per
     /// level of a wide tree, one per level of a compressed one (a node's unvisited children
     /// share one entry).
     pub stack_size: u32,
     /// The SAH cost of the tree as laid out (wide nodes count one traversal step each).
-    pub sah_cost: f64,
+    pub(crate) sah_cost: f64,
 }
 
 impl DeviceLayout {
@@ -162,7 +157,7 @@ impl DeviceLayout {
     }
 
     /// Bytes the device holds per triangle (nodes and triangles together).
-    pub fn bytes_per_triangle(&self) -> f64 {
+    pub(crate) fn bytes_per_triangle(&self) -> f64 {
         (self.nodes.len() + self.triangles.len() * size_of::<Triangle>()) as f64
             / self.triangles.len() as f64
     }

@@ -33,9 +33,9 @@ pub const MAX_DEPTH: u32 = 64;
 /// SAH cost of visiting a node (testing its children's boxes), relative to one
 /// ray/triangle test. Both are 1: the box pair and the watertight triangle test cost
 /// about the same on the devices measured.
-pub const TRAVERSAL_COST: f32 = 1.0;
+pub(crate) const TRAVERSAL_COST: f32 = 1.0;
 /// SAH cost of one ray/triangle test.
-pub const INTERSECTION_COST: f32 = 1.0;
+pub(crate) const INTERSECTION_COST: f32 = 1.0;
 
 /// The SAH cost of a tree as it is summed: each node's surface area weighted by what a
 /// visit costs, relative to the root's area (the chance a ray meeting the root meets it).

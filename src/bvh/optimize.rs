@@ -31,7 +31,7 @@ use crate::bvh::{Bin32Node, LEAF_FLAG};
 use crate::geometry::Bounds;
 
 /// Rounds stop once one lowers the SAH cost by less than this fraction of it.
-pub(crate) const MIN_ROUND_GAIN: f64 = 0.0001;
+pub const MIN_ROUND_GAIN: f64 = 0.0001;
 
 /// The most rounds [`super::BuildOptions::optimize_rounds`] may ask for.
 pub const MAX_ROUNDS: u32 = 1000;

@@ -13,7 +13,7 @@ use super::SahCost;
 use crate::geometry::surface_area_f64;
 
 /// Marks an unused child slot in a wide node's `count`.
-pub(crate) const EMPTY_SLOT: u32 = u32::MAX;
+pub const EMPTY_SLOT: u32 = u32::MAX;
 
 macro_rules! wide_node {
     ($name:ident, $n:literal) => {

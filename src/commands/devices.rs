@@ -18,7 +18,7 @@ fn mib(bytes: u64) -> String {
     format!("{} MiB", bytes >> 20)
 }
 
-pub fn format_table(devices: &[DeviceInfo]) -> String {
+pub(crate) fn format_table(devices: &[DeviceInfo]) -> String {
     let header = [
         "P:D",
         "name",

@@ -77,16 +77,16 @@ pub struct RenderRequest {
 
 /// What a finished render reports.
 #[derive(Clone, Debug)]
-pub struct RenderOutcome {
-    pub frame: Frame,
-    pub method: Method,
+pub(crate) struct RenderOutcome {
+    pub(crate) frame: Frame,
+    pub(crate) method: Method,
     /// The OpenCL device's name, for OpenCL methods.
-    pub device: Option<String>,
-    pub timings: Timings,
+    pub(crate) device: Option<String>,
+    pub(crate) timings: Timings,
 }
 
 /// Refuses sampling settings out of range before any work is done.
-pub fn check_sampling(render: &RenderSettings) -> Result<()> {
+pub(crate) fn check_sampling(render: &RenderSettings) -> Result<()> {
     let range = |name: &str, value: Option<u32>, lo: u32, hi: u32| match value {
         Some(v) if !(lo..=hi).contains(&v) => Err(Error::Invalid(format!(
             "{name} {v} is out of range: use {lo} to {hi}"
@@ -111,7 +111,7 @@ pub fn check_sampling(render: &RenderSettings) -> Result<()> {
 
 /// The sampling of a progressive shade mode, with its samples per pixel, from the settings
 /// (defaults filled in; `None` for the modes that shade one hit).
-pub fn sample_settings(
+pub(crate) fn sample_settings(
     render: &RenderSettings,
     shade: Shade,
     bounds: &Aabb,
@@ -170,7 +170,7 @@ pub fn render(req: &RenderRequest) -> Result<()> {
 /// folder, resolution, field of view, device) happens before the mesh is loaded. With
 /// `fallback_to_cpu` (`--fallback cpu`), a device failure (none found, a failed build, out of memory, lost)
 /// reruns the render on the host, saying so; without it, it is the run's error.
-pub fn run(req: &RenderRequest) -> Result<RenderOutcome> {
+pub(crate) fn run(req: &RenderRequest) -> Result<RenderOutcome> {
     let scene = SceneDescription::named(req.scene.as_deref())?;
     let method = req
         .render
@@ -346,16 +346,4 @@ fn render_with(
         device: device.map(|d| d.info.name),
         timings,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::DEFAULT_LIGHT;
-    use crate::render::integrator::Light;
-
-    /// The default light, as the help shows it, is the integrator's default sun exactly.
-    #[test]
-    fn the_default_light_is_the_default_sun() {
-        assert_eq!(DEFAULT_LIGHT.parse::<Light>(), Ok(Light::default_sun()));
-    }
 }

@@ -5,9 +5,9 @@ mod pitched;
 mod program;
 pub mod tracer;
 
-pub use pitched::PitchedBuffer;
-pub use program::KernelSource;
-pub use tracer::ClTracer;
+pub(crate) use pitched::PitchedBuffer;
+pub use program::{Constant, Program, shared_constants};
+pub use tracer::{ClTracer, Kernel};
 
 use std::fmt;
 use std::str::FromStr;
@@ -42,7 +42,7 @@ pub fn default_layout(device: &DeviceInfo) -> Layout {
 }
 
 /// How to get an OpenCL device on Debian or Ubuntu; part of every "no device" error.
-pub const INSTALL_HINT: &str = "install an OpenCL driver, e.g. PoCL for the CPU: \
+pub(crate) const INSTALL_HINT: &str = "install an OpenCL driver, e.g. PoCL for the CPU: \
      `apt-get install pocl-opencl-icd ocl-icd-opencl-dev` (or your GPU vendor's OpenCL driver)";
 
 /// The kind of a device, as OpenCL reports it.
@@ -68,23 +68,23 @@ impl fmt::Display for DeviceKind {
 /// One OpenCL device and what cltrace needs to know about it.
 #[derive(Clone, Debug)]
 pub struct DeviceInfo {
-    pub platform_index: usize,
-    pub device_index: usize,
-    pub platform_name: String,
+    pub(crate) platform_index: usize,
+    pub(crate) device_index: usize,
+    pub(crate) platform_name: String,
     pub name: String,
-    pub kind: DeviceKind,
-    pub compute_units: u32,
+    pub(crate) kind: DeviceKind,
+    pub(crate) compute_units: u32,
     pub global_memory: u64,
     pub max_allocation: u64,
     pub max_work_group_size: usize,
-    pub opencl_c_version: String,
-    pub driver_version: String,
+    pub(crate) opencl_c_version: String,
+    pub(crate) driver_version: String,
     /// `CL_DEVICE_MEM_BASE_ADDR_ALIGN`, in bytes.
-    pub base_address_alignment: usize,
+    pub(crate) base_address_alignment: usize,
     /// Whether `-cl-fp32-correctly-rounded-divide-sqrt` is honoured.
-    pub correctly_rounded_divide: bool,
-    pub platform: ocl::Platform,
-    pub device: ocl::Device,
+    pub(crate) correctly_rounded_divide: bool,
+    pub(crate) platform: ocl::Platform,
+    pub(crate) device: ocl::Device,
 }
 
 impl DeviceInfo {
@@ -103,7 +103,7 @@ impl DeviceInfo {
 
     /// Row alignment of pitched output buffers: the device's base address alignment, and
     /// never less than 256 bytes.
-    pub fn pitch_alignment(&self) -> usize {
+    pub(crate) fn pitch_alignment(&self) -> usize {
         self.base_address_alignment.max(256)
     }
 
@@ -318,7 +318,7 @@ impl DeviceSelector {
 /// times come from the device's own clock.
 pub struct ClDevice {
     pub info: DeviceInfo,
-    pub context: ocl::Context,
+    pub(crate) context: ocl::Context,
     pub queue: ocl::Queue,
 }
 
@@ -329,7 +329,7 @@ impl ClDevice {
         Self::open(selector.pick(&devices)?.clone())
     }
 
-    pub fn open(info: DeviceInfo) -> Result<Self> {
+    pub(crate) fn open(info: DeviceInfo) -> Result<Self> {
         let fail = |e: ocl::Error| {
             Error::Device(format!(
                 "cannot open OpenCL device {}: {}",
@@ -357,7 +357,7 @@ impl ClDevice {
 
     /// Wraps an OpenCL failure during `doing` into a one-line error, naming running out of
     /// device memory as such.
-    pub fn error(&self, doing: &str, e: ocl::Error) -> Error {
+    pub(crate) fn error(&self, doing: &str, e: ocl::Error) -> Error {
         device_error(&self.info, doing, e)
     }
 }

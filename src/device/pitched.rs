@@ -8,23 +8,23 @@ use super::{ClDevice, device_error};
 use crate::error::Result;
 
 /// A `width` x `height` image of `T` on the device, `pitch` elements from row to row.
-pub struct PitchedBuffer<T: OclPrm> {
-    pub buffer: ocl::Buffer<T>,
-    pub width: usize,
-    pub height: usize,
+pub(crate) struct PitchedBuffer<T: OclPrm> {
+    pub(crate) buffer: ocl::Buffer<T>,
+    pub(crate) width: usize,
+    pub(crate) height: usize,
     /// Elements from the start of one row to the next (a multiple of the alignment).
-    pub pitch: usize,
+    pub(crate) pitch: usize,
 }
 
 impl<T: OclPrm> PitchedBuffer<T> {
     /// Row pitch in bytes for `width` elements: `width * size_of::<T>()` rounded up to
     /// the device's pitch alignment.
-    pub fn pitch_bytes_for(device: &ClDevice, width: usize) -> usize {
+    pub(crate) fn pitch_bytes_for(device: &ClDevice, width: usize) -> usize {
         let align = device.info.pitch_alignment();
         (width * size_of::<T>()).div_ceil(align) * align
     }
 
-    pub fn new(device: &ClDevice, width: usize, height: usize) -> Result<Self> {
+    pub(crate) fn new(device: &ClDevice, width: usize, height: usize) -> Result<Self> {
         let pitch_bytes = Self::pitch_bytes_for(device, width);
         debug_assert_eq!(pitch_bytes % size_of::<T>(), 0);
         let pitch = pitch_bytes / size_of::<T>();
@@ -44,7 +44,7 @@ impl<T: OclPrm> PitchedBuffer<T> {
 
     /// Reads the first `rows` rows into `out`, tightly packed (`width` elements a row),
     /// skipping the padding. Blocks until done (ocl's reads block by default).
-    pub fn read_rows(&self, device: &ClDevice, rows: usize, out: &mut [T]) -> Result<()> {
+    pub(crate) fn read_rows(&self, device: &ClDevice, rows: usize, out: &mut [T]) -> Result<()> {
         assert!(
             rows <= self.height && out.len() >= rows * self.width,
             "read_rows out of bounds"

@@ -1,14 +1,21 @@
-//! The OpenCL C sources in `cl/`, embedded in the binary, and their compilation.
+//! The OpenCL C sources in `cl/`, embedded in the binary; the constants the host shares
+//! with them; and the assembly and compilation of programs.
+//!
+//! A program is a list of `cl/` files in order, after a header of `#define`s that the host
+//! writes from the Rust constants the kernels share ([`shared_constants`]): the common
+//! structs and tests, then the scene (a BVH layout's files, or brute force), then the
+//! kernels. Which files a scene needs is decided here, so that no file dispatches on a
+//! layout: a layout's file is named as the layout is (`Layout::name`), and refuses to
+//! compile without the define [`Layout::define`] its program is built with.
 
 use std::ffi::CString;
 
 use ocl::core::ClDeviceIdPtr;
 
 use super::{ClDevice, first_line};
+use crate::bvh::Layout;
 use crate::error::{Error, Result};
 
-const HEADER: &str = include_str!("../../cl/cltrace.h");
-const INCLUDE_LINE: &str = "#include \"cltrace.h\"";
 /// Reads the kernel sources from this folder instead of the embedded copies (development).
 const KERNEL_DIR_VAR: &str = "CLTRACE_KERNEL_DIR";
 /// Extra OpenCL build options, appended to cltrace's own (development, e.g. vendor flags).
@@ -17,93 +24,275 @@ const BUILD_OPTIONS_VAR: &str = "CLTRACE_BUILD_OPTIONS";
 /// `-cl-nv-verbose` NVIDIA's log gives each kernel's registers and spills).
 const BUILD_LOG_VAR: &str = "CLTRACE_BUILD_LOG";
 
-/// A kernel file of `cl/`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum KernelSource {
-    /// `trace.cl`: the closest-hit kernels, against the BVH when built with `STACK_SIZE`
-    /// (its depth), else against every triangle.
-    Trace,
-    /// `sample.cl`: the progressive shade modes (ambient occlusion, shadows, path
-    /// tracing), against the BVH or every triangle like `Trace`.
-    Sample,
-    /// `probe.cl`: reports the shared structs' layout.
-    Probe,
+/// Every file of `cl/`, embedded: (file name, text).
+const FILES: &[(&str, &str)] = &[
+    ("common.cl", include_str!("../../cl/common.cl")),
+    ("intersect.cl", include_str!("../../cl/intersect.cl")),
+    ("camera.cl", include_str!("../../cl/camera.cl")),
+    ("nodes.cl", include_str!("../../cl/nodes.cl")),
+    ("traverse.cl", include_str!("../../cl/traverse.cl")),
+    ("bin32.cl", include_str!("../../cl/bin32.cl")),
+    ("bin64.cl", include_str!("../../cl/bin64.cl")),
+    ("wide4.cl", include_str!("../../cl/wide4.cl")),
+    ("wide8.cl", include_str!("../../cl/wide8.cl")),
+    ("wide.cl", include_str!("../../cl/wide.cl")),
+    ("cwbvh.cl", include_str!("../../cl/cwbvh.cl")),
+    ("brute.cl", include_str!("../../cl/brute.cl")),
+    ("sampling.cl", include_str!("../../cl/sampling.cl")),
+    ("shade.cl", include_str!("../../cl/shade.cl")),
+    ("trace.cl", include_str!("../../cl/trace.cl")),
+    ("integrator.cl", include_str!("../../cl/integrator.cl")),
+    ("probe.cl", include_str!("../../cl/probe.cl")),
+];
+
+/// A constant the kernels share with the host, as Rust holds it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Constant {
+    U32(u32),
+    I32(i32),
+    F32(f32),
 }
 
-impl KernelSource {
-    pub fn file_name(self) -> &'static str {
+impl Constant {
+    /// The constant as an OpenCL C literal of the same type and value: `u`-suffixed for
+    /// `uint`, a C99 hexadecimal float (exact bits) for `float`.
+    pub(crate) fn literal(self) -> String {
         match self {
-            KernelSource::Trace => "trace.cl",
-            KernelSource::Sample => "sample.cl",
-            KernelSource::Probe => "probe.cl",
+            Constant::U32(v) if v < 256 => format!("{v}u"),
+            Constant::U32(v) => format!("{v:#x}u"),
+            Constant::I32(v) if v < 0 => format!("({v})"),
+            Constant::I32(v) => v.to_string(),
+            Constant::F32(v) => hex_float(v),
         }
     }
+}
 
-    fn text(self) -> &'static str {
-        match self {
-            KernelSource::Trace => include_str!("../../cl/trace.cl"),
-            KernelSource::Sample => include_str!("../../cl/sample.cl"),
-            KernelSource::Probe => include_str!("../../cl/probe.cl"),
+/// `v` as a C99 hexadecimal float literal with an `f` suffix, exact to the bit.
+fn hex_float(v: f32) -> String {
+    assert!(v.is_finite(), "{v} has no OpenCL C literal");
+    let bits = v.to_bits();
+    let sign = if bits >> 31 != 0 { "-" } else { "" };
+    let exponent = ((bits >> 23) & 0xFF) as i32;
+    // 23 fraction bits, shifted to fill six hexadecimal digits.
+    let fraction = (bits & 0x7F_FFFF) << 1;
+    match exponent {
+        0 if fraction == 0 => format!("{sign}0x0p+0f"),
+        0 => format!("{sign}0x0.{fraction:06x}p-126f"),
+        e => format!("{sign}0x1.{fraction:06x}p{:+}f", e - 127),
+    }
+}
+
+/// Every constant the kernels share with the host, by the name the kernels use: written
+/// once, in Rust, and defined in front of every program. `tests/layout.rs` has the probe
+/// kernel report each as the device compiler sees it.
+pub fn shared_constants() -> Vec<(&'static str, Constant)> {
+    use crate::render::{Shade, integrator, sampling};
+    use Constant::*;
+    vec![
+        ("MISS", U32(crate::render::MISS)),
+        ("LEAF_FLAG", U32(crate::bvh::LEAF_FLAG)),
+        ("EMPTY_SLOT", U32(crate::bvh::wide::EMPTY_SLOT)),
+        (
+            "STATUS_STACK_OVERFLOW",
+            U32(super::tracer::STATUS_STACK_OVERFLOW),
+        ),
+        ("SHADE_NORMAL", I32(Shade::Normal.code())),
+        ("SHADE_DEPTH", I32(Shade::Depth.code())),
+        ("SHADE_LAMBERT", I32(Shade::Lambert.code())),
+        ("DIMS_PER_BOUNCE", U32(sampling::DIMS_PER_BOUNCE)),
+        ("SHADOW_AMBIENT", F32(integrator::SHADOW_AMBIENT)),
+        ("ROULETTE_AFTER", U32(integrator::ROULETTE_AFTER)),
+        ("ROBUST_EXIT", F32(crate::intersect::ROBUST_EXIT)),
+    ]
+}
+
+/// The header in front of every program: [`shared_constants`] as `#define`s.
+fn constants_header() -> String {
+    let mut header = String::from(
+        "/* The constants the kernels share with the host, written from their Rust \
+         definitions (src/device/program.rs, shared_constants). */\n",
+    );
+    for (name, value) in shared_constants() {
+        header.push_str(&format!("#define {name} {}\n", value.literal()));
+    }
+    header
+}
+
+/// The text of `cl/<name>`: the embedded copy or, with `CLTRACE_KERNEL_DIR` set, the file
+/// in that folder (for trying kernel changes without rebuilding).
+fn file_text(name: &str) -> String {
+    match std::env::var_os(KERNEL_DIR_VAR) {
+        Some(dir) => {
+            std::fs::read_to_string(std::path::Path::new(&dir).join(name)).unwrap_or_else(|e| {
+                // An unreadable override must not silently fall back.
+                format!("#error \"{KERNEL_DIR_VAR}: cannot read {name}: {e}\"\n")
+            })
         }
+        None => FILES
+            .iter()
+            .find(|(n, _)| *n == name)
+            .unwrap_or_else(|| panic!("cl/{name} is not embedded"))
+            .1
+            .to_string(),
+    }
+}
+
+/// The files of `cl/` that trace a BVH in `layout`, in program order: its own file, named
+/// as the layout is, and for the wide layouts the traversal they share after it.
+fn layout_files(layout: Layout) -> Vec<String> {
+    let own = format!("{}.cl", layout.name());
+    match layout {
+        Layout::Wide4 | Layout::Wide8 => vec![own, "wide.cl".into()],
+        Layout::Bin32 | Layout::Bin64 | Layout::Cwbvh => vec![own],
+    }
+}
+
+/// The defines of a program for a BVH in `layout`, with `stack_size` traversal stack
+/// entries: the layout's own (its file refuses to compile without it), the stack's size,
+/// and for the wide layouts the slots of a node.
+fn layout_defines(layout: Layout, stack_size: u32) -> Vec<String> {
+    use crate::bvh::wide::WideNode;
+    let mut defines = vec![layout.define(), format!("STACK_SIZE={}", stack_size.max(1))];
+    let width = match layout {
+        Layout::Wide4 => Some(crate::bvh::wide4::Wide4Node::WIDTH),
+        Layout::Wide8 => Some(crate::bvh::wide8::Wide8Node::WIDTH),
+        Layout::Bin32 | Layout::Bin64 | Layout::Cwbvh => None,
+    };
+    if let Some(width) = width {
+        defines.push(format!("WIDE_WIDTH={width}"));
+    }
+    defines
+}
+
+/// The files of a tracing program in order: for a BVH in `layout` (`None`: brute force),
+/// with `sampling` the progressive shade modes too.
+fn program_files(layout: Option<Layout>, sampling: bool) -> Vec<String> {
+    let mut files: Vec<String> = ["common.cl", "intersect.cl", "camera.cl"]
+        .map(String::from)
+        .to_vec();
+    match layout {
+        Some(layout) => {
+            files.extend(["nodes.cl", "traverse.cl"].map(String::from));
+            files.extend(layout_files(layout));
+        }
+        None => files.push("brute.cl".into()),
+    }
+    files.extend(["shade.cl", "trace.cl"].map(String::from));
+    if sampling {
+        files.extend(["sampling.cl", "integrator.cl"].map(String::from));
+    }
+    files
+}
+
+/// The files of the probe program: the shared structs, every node struct, the probe.
+const PROBE_FILES: [&str; 3] = ["common.cl", "nodes.cl", "probe.cl"];
+
+/// The source of a program: the constants header, then each file after a `#line` naming
+/// it, so that a build log points into the file itself.
+fn program_source(files: &[String]) -> String {
+    let mut source = constants_header();
+    for name in files {
+        source.push_str(&format!("#line 1 \"{name}\"\n"));
+        source.push_str(&file_text(name));
+        source.push('\n');
+    }
+    source
+}
+
+/// A compiled tracing program and what it was compiled for: the BVH layout its kernels
+/// traverse (`None`: every triangle), and whether it holds the sampling kernels. A tracer
+/// refuses a program compiled for another scene.
+#[derive(Clone, Debug)]
+pub struct Program {
+    program: ocl::Program,
+    layout: Option<Layout>,
+    sampling: bool,
+}
+
+impl Program {
+    /// The BVH layout the kernels traverse; `None` for brute force.
+    pub fn layout(&self) -> Option<Layout> {
+        self.layout
     }
 
-    /// The complete source: the kernel file with the shared header spliced in where it
-    /// includes it (the program is built from memory, where `#include` finds no files).
-    /// With `CLTRACE_KERNEL_DIR` set, the files are read from that folder instead of the
-    /// copies embedded in the binary: for trying kernel changes without rebuilding.
-    pub fn source(self) -> String {
-        match std::env::var_os(KERNEL_DIR_VAR) {
-            Some(dir) => {
-                let dir = std::path::Path::new(&dir);
-                let read = |name: &str| {
-                    std::fs::read_to_string(dir.join(name)).unwrap_or_else(|e| {
-                        // An unreadable override must not silently fall back.
-                        format!("#error \"{KERNEL_DIR_VAR}: cannot read {name}: {e}\"\n")
-                    })
-                };
-                read(self.file_name()).replacen(INCLUDE_LINE, &read("cltrace.h"), 1)
-            }
-            None => self.text().replacen(INCLUDE_LINE, HEADER, 1),
-        }
+    /// Whether the program holds the progressive shade modes' kernels (cl/integrator.cl).
+    pub(crate) fn has_sampling(&self) -> bool {
+        self.sampling
+    }
+
+    /// The OpenCL program.
+    pub fn ocl(&self) -> &ocl::Program {
+        &self.program
     }
 }
 
 impl ClDevice {
-    /// Compiles `kernel` for this device with `-D name=value` for each define. The host
-    /// and device must round identically, so division and square root are correctly
-    /// rounded where the device offers it. A failed build reports the device's build log.
-    pub fn build(&self, kernel: KernelSource, defines: &[(&str, String)]) -> Result<ocl::Program> {
-        self.build_all(&[kernel], defines)
+    /// Compiles the tracing kernels, and with `sampling` the progressive shade modes too,
+    /// against a BVH in `layout` with a traversal stack of `stack_size` entries or, for
+    /// `None`, against every triangle. `extra_options` go after cltrace's own build options
+    /// (tests: `-cl-kernel-arg-info`).
+    pub fn compile_program(
+        &self,
+        bvh: Option<(Layout, u32)>,
+        sampling: bool,
+        extra_options: &str,
+    ) -> Result<Program> {
+        let layout = bvh.map(|(layout, _)| layout);
+        let defines = match bvh {
+            Some((layout, stack_size)) => layout_defines(layout, stack_size),
+            None => Vec::new(),
+        };
+        let kernels = if sampling {
+            "trace.cl + integrator.cl"
+        } else {
+            "trace.cl"
+        };
+        let label = match layout {
+            Some(layout) => format!("{kernels} ({})", layout.name()),
+            None => format!("{kernels} (brute force)"),
+        };
+        let options = self.build_options(&defines, extra_options);
+        let source = program_source(&program_files(layout, sampling));
+        let program = self.build_source(&label, &source, &options)?;
+        Ok(Program {
+            program,
+            layout,
+            sampling,
+        })
     }
 
-    /// Compiles several kernel files into one program (the shared header's include guard
-    /// keeps its second copy out).
-    pub fn build_all(
-        &self,
-        kernels: &[KernelSource],
-        defines: &[(&str, String)],
-    ) -> Result<ocl::Program> {
+    /// Compiles `probe.cl`, whose kernels report the shared structs' layout and the shared
+    /// constants as this device sees them (tests/layout.rs).
+    pub fn compile_probe(&self) -> Result<ocl::Program> {
+        let files = PROBE_FILES.map(String::from);
+        let options = self.build_options(&[], "");
+        self.build_source("probe.cl", &program_source(&files), &options)
+    }
+
+    /// cltrace's build options with `-D` for each define, then `extra`, then
+    /// `CLTRACE_BUILD_OPTIONS`. The host and device must round identically, so division and
+    /// square root are correctly rounded where the device offers it.
+    fn build_options(&self, defines: &[String], extra: &str) -> String {
         let mut options = String::from("-cl-std=CL1.2");
         if self.info.correctly_rounded_divide {
             options.push_str(" -cl-fp32-correctly-rounded-divide-sqrt");
         }
-        for (name, value) in defines {
-            options.push_str(&format!(" -D {name}={value}"));
+        for define in defines {
+            options.push_str(&format!(" -D {define}"));
+        }
+        if !extra.is_empty() {
+            options.push(' ');
+            options.push_str(extra);
         }
         if let Ok(extra) = std::env::var(BUILD_OPTIONS_VAR) {
             options.push(' ');
             options.push_str(&extra);
         }
-        let names: Vec<&str> = kernels.iter().map(|k| k.file_name()).collect();
-        let source: String = kernels
-            .iter()
-            .map(|k| k.source())
-            .collect::<Vec<_>>()
-            .join("\n");
-        self.build_source(&names.join(" + "), &source, &options)
+        options
     }
 
-    /// Compiles arbitrary source; `name` labels errors.
+    /// Compiles arbitrary source; `name` labels errors. A failed build reports the device's
+    /// build log.
     pub fn build_source(&self, name: &str, source: &str, options: &str) -> Result<ocl::Program> {
         let fail = |e: ocl::core::Error| {
             Error::Device(format!(
@@ -155,15 +344,78 @@ mod tests {
     use super::*;
 
     #[test]
-    fn header_is_spliced_into_every_kernel() {
-        for k in [
-            KernelSource::Trace,
-            KernelSource::Sample,
-            KernelSource::Probe,
-        ] {
-            let s = k.source();
-            assert!(s.contains("typedef struct"), "{}", k.file_name());
-            assert!(!s.contains(INCLUDE_LINE), "{}", k.file_name());
+    fn every_file_a_program_needs_is_embedded_and_every_embedded_file_is_used() {
+        let mut used: Vec<String> = PROBE_FILES.map(String::from).to_vec();
+        for sampling in [false, true] {
+            used.extend(program_files(None, sampling));
+            for layout in Layout::ALL {
+                used.extend(program_files(Some(layout), sampling));
+            }
         }
+        for name in &used {
+            assert!(FILES.iter().any(|(n, _)| n == name), "{name}");
+        }
+        for (name, _) in FILES {
+            assert!(used.iter().any(|n| n == name), "{name} is in no program");
+        }
+    }
+
+    /// Each layout's name is one file name and one define, and its file refuses to
+    /// compile without that define.
+    #[test]
+    fn each_layout_has_its_file_and_define() {
+        for layout in Layout::ALL {
+            let own = format!("{}.cl", layout.name());
+            assert_eq!(layout_files(layout)[0], own);
+            let define = layout.define();
+            let text = file_text(&own);
+            assert!(
+                text.contains(&format!("#ifndef {define}\n#error")),
+                "{own} does not refuse to compile without {define}"
+            );
+            for (name, text) in FILES {
+                if *name != own {
+                    assert!(!text.contains(&define), "{name} mentions {define}");
+                }
+            }
+        }
+    }
+
+    /// The shared constants are defined by the host alone: no kernel file defines one of
+    /// its own, and none dispatches on a layout number any more.
+    #[test]
+    fn no_kernel_file_defines_a_shared_constant() {
+        let names: Vec<&str> = shared_constants().iter().map(|c| c.0).collect();
+        for (file, text) in FILES {
+            for line in text.lines() {
+                let Some(rest) = line.trim_start().strip_prefix("#define ") else {
+                    continue;
+                };
+                let defined = rest.split(|c: char| !c.is_ascii_alphanumeric() && c != '_');
+                let defined = defined.into_iter().next().unwrap_or("");
+                assert!(!names.contains(&defined), "{file} defines {defined}");
+            }
+            assert!(!text.contains("#if LAYOUT"), "{file} dispatches on LAYOUT");
+        }
+    }
+
+    #[test]
+    fn literals_keep_type_and_bits() {
+        assert_eq!(Constant::U32(u32::MAX).literal(), "0xffffffffu");
+        assert_eq!(Constant::U32(8).literal(), "8u");
+        assert_eq!(Constant::I32(2).literal(), "2");
+        assert_eq!(Constant::I32(-3).literal(), "(-3)");
+        assert_eq!(Constant::F32(0.1).literal(), "0x1.99999ap-4f");
+        assert_eq!(Constant::F32(1.0).literal(), "0x1.000000p+0f");
+        assert_eq!(
+            Constant::F32(1.0 + 3.0 * f32::EPSILON).literal(),
+            "0x1.000006p+0f"
+        );
+        assert_eq!(Constant::F32(-2.5).literal(), "-0x1.400000p+1f");
+        assert_eq!(Constant::F32(0.0).literal(), "0x0p+0f");
+        assert_eq!(
+            Constant::F32(f32::from_bits(1)).literal(),
+            "0x0.000002p-126f"
+        );
     }
 }

@@ -8,7 +8,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use ocl::enums::ProfilingInfo;
 use ocl::prm::Float4;
 
-use super::{ClDevice, KernelSource, PitchedBuffer};
+use super::{ClDevice, PitchedBuffer, Program};
 use crate::bvh::{Bin32Bvh, DeviceLayout, Layout};
 use crate::camera::Pinhole;
 use crate::error::{Error, Result};
@@ -19,15 +19,184 @@ use crate::render::integrator::{Accumulation, Emitters, Light, Lighting, SampleS
 use crate::render::{Frame, Hit, ShadeParams};
 
 /// Default bound on one kernel launch, in milliseconds of device time.
-pub const LAUNCH_TARGET_MS: f64 = 100.0;
+pub(crate) const LAUNCH_TARGET_MS: f64 = 100.0;
+
+/// The bit a BVH kernel sets in the scene's status flag when a traversal overflowed its
+/// stack (`STATUS_STACK_OVERFLOW` in the kernels).
+pub const STATUS_STACK_OVERFLOW: u32 = 1;
+
+/// The kernels of a tracing program: `trace_primary` and `trace_rays` of cl/trace.cl, and
+/// the progressive shade modes of cl/integrator.cl.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kernel {
+    TracePrimary,
+    TraceRays,
+    SampleAo,
+    SampleShadow,
+    SamplePath,
+}
+
+impl Kernel {
+    pub const ALL: [Kernel; 5] = [
+        Kernel::TracePrimary,
+        Kernel::TraceRays,
+        Kernel::SampleAo,
+        Kernel::SampleShadow,
+        Kernel::SamplePath,
+    ];
+
+    /// The kernel's name in its `cl/` file.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kernel::TracePrimary => "trace_primary",
+            Kernel::TraceRays => "trace_rays",
+            Kernel::SampleAo => "sample_ao",
+            Kernel::SampleShadow => "sample_shadow",
+            Kernel::SamplePath => "sample_path",
+        }
+    }
+
+    /// Whether the kernel is one of the progressive shade modes, in programs compiled with
+    /// sampling only.
+    pub(crate) fn is_sampling(self) -> bool {
+        matches!(
+            self,
+            Kernel::SampleAo | Kernel::SampleShadow | Kernel::SamplePath
+        )
+    }
+
+    /// The kernel's parameters in order, as the host binds them: the scene's (`bvh`: those
+    /// of a BVH program, else those of brute force), then the kernel's own.
+    /// tests/layout.rs compares them with the device compiler's.
+    pub fn parameters(self, bvh: bool) -> Vec<&'static str> {
+        let scene = if bvh {
+            BvhSceneParams::NAMES
+        } else {
+            BruteSceneParams::NAMES
+        };
+        let own = match self {
+            Kernel::TracePrimary => TracePrimaryParams::NAMES,
+            Kernel::TraceRays => TraceRaysParams::NAMES,
+            Kernel::SampleAo | Kernel::SampleShadow | Kernel::SamplePath => SampleParams::NAMES,
+        };
+        [scene, own].concat()
+    }
+}
+
+/// The parameters of a kernel (or the scene's, which lead every kernel's) as a struct
+/// whose fields are named and ordered as the kernel's parameters are: `bind` adds them to a
+/// kernel builder under their names, `set` sets them by name on a built kernel.
+macro_rules! kernel_params {
+    ($(#[$doc:meta])* struct $name:ident<$a:lifetime> { $($field:ident: $ty:ty,)* }) => {
+        $(#[$doc])*
+        #[derive(Clone, Copy)]
+        struct $name<$a> {
+            $($field: $ty,)*
+        }
+
+        impl<$a> $name<$a> {
+            const NAMES: &'static [&'static str] = &[$(stringify!($field)),*];
+
+            fn bind<'b>(&self, builder: &mut ocl::builders::KernelBuilder<'b>)
+            where
+                $a: 'b,
+            {
+                $(builder.arg_named(stringify!($field), self.$field);)*
+            }
+
+            // The scene's parameters are bound once and never set again.
+            #[allow(dead_code)]
+            fn set(&self, kernel: &ocl::Kernel) -> std::result::Result<(), ocl::Error> {
+                $(kernel.set_arg(stringify!($field), self.$field)?;)*
+                Ok(())
+            }
+        }
+    };
+}
+
+kernel_params! {
+    /// `SCENE_PARAMS` of a BVH program (cl/bin32.cl and the other layouts' files).
+    struct BvhSceneParams<'a> {
+        nodes: &'a ocl::Buffer<u8>,
+        tris: &'a ocl::Buffer<Triangle>,
+        status: &'a ocl::Buffer<u32>,
+    }
+}
+
+kernel_params! {
+    /// `SCENE_PARAMS` of a brute-force program (cl/brute.cl).
+    struct BruteSceneParams<'a> {
+        tris: &'a ocl::Buffer<Triangle>,
+        tri_count: u32,
+    }
+}
+
+kernel_params! {
+    /// `trace_primary` (cl/trace.cl) after the scene's parameters.
+    struct TracePrimaryParams<'a> {
+        eye: Float4,
+        p0: Float4,
+        du: Float4,
+        dv: Float4,
+        width: u32,
+        row0: u32,
+        row_end: u32,
+        shade: i32,
+        near: f32,
+        far: f32,
+        hits: Option<&'a ocl::Buffer<Hit>>,
+        hit_pitch: u32,
+        colors: Option<&'a ocl::Buffer<u32>>,
+        color_pitch: u32,
+    }
+}
+
+kernel_params! {
+    /// `trace_rays` (cl/trace.cl) after the scene's parameters.
+    struct TraceRaysParams<'a> {
+        rays: &'a ocl::Buffer<Float4>,
+        count: u32,
+        any_hit: i32,
+        hits: &'a ocl::Buffer<Hit>,
+    }
+}
+
+kernel_params! {
+    /// `SAMPLE_PARAMS` after the scene's, which every kernel of cl/integrator.cl takes:
+    /// `LIGHT_PARAMS`, the camera, the band, the sample and the shade mode's settings.
+    struct SampleParams<'a> {
+        materials: &'a ocl::Buffer<Material>,
+        emitters: &'a ocl::Buffer<u32>,
+        emitter_cdf: &'a ocl::Buffer<f32>,
+        emitter_count: u32,
+        emitter_area: f32,
+        eye: Float4,
+        p0: Float4,
+        du: Float4,
+        dv: Float4,
+        width: u32,
+        row0: u32,
+        row_end: u32,
+        offset: f32,
+        seed: u32,
+        sample: u32,
+        ao_samples: u32,
+        ao_distance: f32,
+        light: Float4,
+        max_bounces: u32,
+        accum: &'a ocl::Buffer<Float4>,
+        rays: &'a ocl::Buffer<u32>,
+        accum_pitch: u32,
+    }
+}
 
 /// What one render on the device cost.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct DeviceTimes {
     /// Sum of the kernel launches' device time (profiling events).
-    pub kernel_ms: f64,
+    pub(crate) kernel_ms: f64,
     /// Host wall time of the rectangular reads.
-    pub read_back_ms: f64,
+    pub(crate) read_back_ms: f64,
     pub launches: u32,
 }
 
@@ -46,7 +215,7 @@ struct DeviceBvh {
     status: ocl::Buffer<u32>,
 }
 
-/// What the shade modes read besides the geometry (`LIGHT_PARAMS` in cl/sample.cl).
+/// What the shade modes read besides the geometry (`LIGHT_PARAMS` in cl/integrator.cl).
 struct DeviceLights {
     materials: ocl::Buffer<Material>,
     emitters: ocl::Buffer<u32>,
@@ -58,7 +227,8 @@ struct DeviceLights {
 /// The kernels compiled for one device with their scene uploaded, ready to trace.
 pub struct ClTracer<'d> {
     device: &'d ClDevice,
-    program: ocl::Program,
+    /// The kernels, compiled for this tracer's scene.
+    program: Program,
     scene: Scene,
     lights: Option<DeviceLights>,
     primary: ocl::Kernel,
@@ -69,8 +239,6 @@ pub struct ClTracer<'d> {
     image_budget: u64,
     /// Work-group shape of the image kernels (its product for the ray-buffer kernel).
     local: [usize; 2],
-    /// The BVH's node layout (`None` for brute force).
-    layout: Option<Layout>,
 }
 
 /// Sizes bands of rows so that each launch takes about [`LAUNCH_TARGET_MS`].
@@ -102,13 +270,13 @@ impl BandPlanner {
 
 impl<'d> ClTracer<'d> {
     /// Compiles the kernels against a plain triangle list (brute force).
-    pub fn compile_brute(device: &'d ClDevice) -> Result<ocl::Program> {
+    pub fn compile_brute(device: &'d ClDevice) -> Result<Program> {
         Self::compile(device, None, false)
     }
 
     /// Compiles the kernels against a thesis-layout BVH, with a traversal stack as deep as
     /// the tree.
-    pub fn compile_bvh(device: &'d ClDevice, depth: u32) -> Result<ocl::Program> {
+    pub fn compile_bvh(device: &'d ClDevice, depth: u32) -> Result<Program> {
         Self::compile(device, Some((Layout::Bin32, depth)), false)
     }
 
@@ -119,26 +287,13 @@ impl<'d> ClTracer<'d> {
         device: &'d ClDevice,
         bvh: Option<(Layout, u32)>,
         sampling: bool,
-    ) -> Result<ocl::Program> {
-        let mut defines: Vec<(&str, String)> = Vec::new();
-        if let Some((layout, stack_size)) = bvh {
-            defines.push(("LAYOUT", layout.code().to_string()));
-            defines.push(("STACK_SIZE", stack_size.max(1).to_string()));
-        }
-        let kernels: &[KernelSource] = if sampling {
-            &[KernelSource::Trace, KernelSource::Sample]
-        } else {
-            &[KernelSource::Trace]
-        };
-        device.build_all(kernels, &defines)
+    ) -> Result<Program> {
+        device.compile_program(bvh, sampling, "")
     }
 
     /// Uploads the triangles (in file order) for the brute-force kernels.
-    pub fn brute(
-        device: &'d ClDevice,
-        program: &ocl::Program,
-        triangles: &[Triangle],
-    ) -> Result<Self> {
+    pub fn brute(device: &'d ClDevice, program: &Program, triangles: &[Triangle]) -> Result<Self> {
+        check_program(program, None)?;
         check_scene_memory(device, &[("triangles", size_of_val(triangles) as u64)])?;
         let scene = Scene {
             triangles: upload(device, triangles, "uploading triangles")?,
@@ -155,36 +310,34 @@ impl<'d> ClTracer<'d> {
     }
 
     /// Uploads a thesis-layout BVH for kernels compiled with [`ClTracer::compile_bvh`].
-    pub fn bvh(device: &'d ClDevice, program: &ocl::Program, bvh: &Bin32Bvh) -> Result<Self> {
-        let mut t = Self::with_nodes(
+    pub fn bvh(device: &'d ClDevice, program: &Program, bvh: &Bin32Bvh) -> Result<Self> {
+        check_program(program, Some(Layout::Bin32))?;
+        Self::with_nodes(
             device,
             program,
             bytemuck::cast_slice(&bvh.nodes),
             &bvh.triangles,
-        )?;
-        t.layout = Some(Layout::Bin32);
-        Ok(t)
+        )
     }
 
     /// Uploads a BVH in any layout, for kernels compiled with its layout and stack size.
     pub fn with_layout(
         device: &'d ClDevice,
-        program: &ocl::Program,
+        program: &Program,
         layout: &DeviceLayout,
     ) -> Result<Self> {
-        let mut t = Self::with_nodes(device, program, &layout.nodes, &layout.triangles)?;
-        t.layout = Some(layout.layout);
-        Ok(t)
+        check_program(program, Some(layout.layout))?;
+        Self::with_nodes(device, program, &layout.nodes, &layout.triangles)
     }
 
     /// The BVH's node layout, `None` for brute force.
     pub fn layout(&self) -> Option<Layout> {
-        self.layout
+        self.program.layout()
     }
 
     fn with_nodes(
         device: &'d ClDevice,
-        program: &ocl::Program,
+        program: &Program,
         nodes: &[u8],
         triangles: &[Triangle],
     ) -> Result<Self> {
@@ -214,29 +367,33 @@ impl<'d> ClTracer<'d> {
 
     fn new(
         device: &'d ClDevice,
-        program: &ocl::Program,
+        program: &Program,
         scene: Scene,
         first_band_pixels: usize,
     ) -> Result<Self> {
-        let mut builder = kernel_builder(device, program, "trace_primary", &scene);
-        builder
-            .arg(Float4::zero())
-            .arg(Float4::zero())
-            .arg(Float4::zero())
-            .arg(Float4::zero())
-            .arg(0u32)
-            .arg(0u32)
-            .arg(0u32)
-            .arg(0i32)
-            .arg(0f32)
-            .arg(0f32)
-            .arg(None::<&ocl::Buffer<Hit>>)
-            .arg(0u32)
-            .arg(None::<&ocl::Buffer<u32>>)
-            .arg(0u32);
+        // Bound now, with the frame's values set by render().
+        let unset = TracePrimaryParams {
+            eye: Float4::zero(),
+            p0: Float4::zero(),
+            du: Float4::zero(),
+            dv: Float4::zero(),
+            width: 0,
+            row0: 0,
+            row_end: 0,
+            shade: 0,
+            near: 0.0,
+            far: 0.0,
+            hits: None,
+            hit_pitch: 0,
+            colors: None,
+            color_pitch: 0,
+        };
+        let kernel = Kernel::TracePrimary;
+        let mut builder = kernel_builder(device, program, kernel, &scene)?;
+        unset.bind(&mut builder);
         let primary = builder
             .build()
-            .map_err(|e| device.error("creating the trace_primary kernel", e))?;
+            .map_err(|e| device.error(&format!("creating the {} kernel", kernel.name()), e))?;
         Ok(ClTracer {
             device,
             program: program.clone(),
@@ -256,13 +413,12 @@ impl<'d> ClTracer<'d> {
                 .max_allocation
                 .min(device.info.global_memory / 8),
             local: default_work_group(device),
-            layout: None,
         })
     }
 
     /// Sets the work-group shape (pixels across, down) of the kernels; `cltrace tune` finds
     /// the best one per device. Shapes the device cannot run are refused.
-    pub fn set_work_group(&mut self, local: [usize; 2]) -> Result<()> {
+    pub(crate) fn set_work_group(&mut self, local: [usize; 2]) -> Result<()> {
         let size = local[0] * local[1];
         if size == 0 || size > self.device.info.max_work_group_size {
             return Err(Error::Invalid(format!(
@@ -283,7 +439,7 @@ impl<'d> ClTracer<'d> {
 
     /// Uploads the materials (indexed by the triangles' `material`) and the emitters (indices
     /// into this tracer's triangle order), which the shade modes need.
-    pub fn set_lights(&mut self, materials: &[Material], emitters: &Emitters) -> Result<()> {
+    pub(crate) fn set_lights(&mut self, materials: &[Material], emitters: &Emitters) -> Result<()> {
         let device = self.device;
         // Buffers cannot be empty: a lone zero stands in for "no emitters".
         let (list, cdf) = if emitters.is_empty() {
@@ -302,7 +458,7 @@ impl<'d> ClTracer<'d> {
     }
 
     /// Adds the samples `samples` of every pixel to `accumulation`, with the kernels of
-    /// cl/sample.cl (the program must have been compiled with sampling). Launches cover bands
+    /// cl/integrator.cl (the program must have been compiled with sampling). Launches cover bands
     /// of rows, each about [`LAUNCH_TARGET_MS`]; a whole sample of the image is taken before
     /// the next one where the accumulation image fits on the device, so that stopping early
     /// (`stop` set, checked between launches) leaves every pixel with nearly the same number
@@ -322,11 +478,13 @@ impl<'d> ClTracer<'d> {
         let device = self.device;
         let (width, height) = (accumulation.width, accumulation.height);
         let (w, h) = (width as usize, height as usize);
-        let name = match settings.lighting {
-            Lighting::Ao { .. } => "sample_ao",
-            Lighting::Shadow { .. } => "sample_shadow",
-            Lighting::Path { .. } => "sample_path",
+        let kernel = match settings.lighting {
+            Lighting::Ao { .. } => Kernel::SampleAo,
+            Lighting::Shadow { .. } => Kernel::SampleShadow,
+            Lighting::Path { .. } => Kernel::SamplePath,
         };
+        require_kernel(&self.program, kernel)?;
+        let name = kernel.name();
         if self.lights.is_none() {
             self.set_lights(&[Material::default()], &Emitters::default())?;
         }
@@ -354,40 +512,40 @@ impl<'d> ClTracer<'d> {
             Lighting::Path { max_bounces } => (0, 0.0, Float4::zero(), max_bounces),
         };
         let f4 = |v: [f32; 4]| Float4::new(v[0], v[1], v[2], v[3]);
-        let mut builder = kernel_builder(device, &self.program, name, &self.scene);
-        builder
-            .arg(&lights.materials)
-            .arg(&lights.emitters)
-            .arg(&lights.cdf)
-            .arg(lights.count)
-            .arg(lights.area)
-            .arg(f4(camera.eye))
-            .arg(f4(camera.p0))
-            .arg(f4(camera.du))
-            .arg(f4(camera.dv))
-            .arg(width)
-            .arg(0u32)
-            .arg(0u32)
-            .arg(settings.offset)
-            .arg(settings.seed)
-            .arg(0u32)
-            .arg(ao_samples)
-            .arg(ao_distance)
-            .arg(light)
-            .arg(max_bounces)
-            .arg(&accum.buffer)
-            .arg(&rays)
-            .arg(pitch as u32);
+        // The band (row0, row_end) and the sample change from launch to launch.
+        let mut params = SampleParams {
+            materials: &lights.materials,
+            emitters: &lights.emitters,
+            emitter_cdf: &lights.cdf,
+            emitter_count: lights.count,
+            emitter_area: lights.area,
+            eye: f4(camera.eye),
+            p0: f4(camera.p0),
+            du: f4(camera.du),
+            dv: f4(camera.dv),
+            width,
+            row0: 0,
+            row_end: 0,
+            offset: settings.offset,
+            seed: settings.seed,
+            sample: 0,
+            ao_samples,
+            ao_distance,
+            light,
+            max_bounces,
+            accum: &accum.buffer,
+            rays: &rays,
+            accum_pitch: pitch as u32,
+        };
+        let mut builder = kernel_builder(device, &self.program, kernel, &self.scene)?;
+        params.bind(&mut builder);
         let kernel = builder
             .build()
             .map_err(|e| device.error(&format!("creating the {name} kernel"), e))?;
-        // Argument positions after the scene's: row0, row_end, sample.
-        let base = self.scene.arg_count() + 5;
-        let (row0_arg, row_end_arg, sample_arg) = (base + 5, base + 6, base + 9);
-        let set = |i: u32, v: u32| {
-            kernel
-                .set_arg(i, v)
-                .map_err(|e| device.error(&format!("setting kernel argument {i}"), e))
+        let set = |params: &SampleParams| {
+            params
+                .set(&kernel)
+                .map_err(|e| device.error(&format!("setting the arguments of {name}"), e))
         };
 
         self.scene.clear_status(device)?;
@@ -409,15 +567,16 @@ impl<'d> ClTracer<'d> {
                 .enq()
                 .map_err(|e| device.error("clearing the ray counts", e))?;
             // The accumulation image's row 0 is the group's first row; bands run inside it.
-            set(row0_arg, group0 as u32)?;
+            params.row0 = group0 as u32;
             let mut stopped = false;
             let mut rays_per_sample = None;
             'samples: for (done, sample) in samples.clone().enumerate() {
-                set(sample_arg, sample)?;
+                params.sample = sample;
                 let mut y0 = group0;
                 while y0 < group0 + group_rows {
                     let rows = self.sample_bands.next_rows(w, group0 + group_rows - y0);
-                    set(row_end_arg, (y0 + rows) as u32)?;
+                    params.row_end = (y0 + rows) as u32;
+                    set(&params)?;
                     let ms = launch_rows(device, &kernel, local, w, y0, rows)?;
                     times.kernel_ms += ms;
                     times.launches += 1;
@@ -486,23 +645,24 @@ impl<'d> ClTracer<'d> {
         let colors = PitchedBuffer::<u32>::new(device, w, band_capacity)?;
 
         let k = &self.primary;
-        let set = |i: u32, e: std::result::Result<(), ocl::Error>| {
-            e.map_err(|e| device.error(&format!("setting kernel argument {i}"), e))
-        };
         let f4 = |v: [f32; 4]| Float4::new(v[0], v[1], v[2], v[3]);
-        let a = self.scene.arg_count();
-        set(a, k.set_arg(a, f4(camera.eye)))?;
-        set(a + 1, k.set_arg(a + 1, f4(camera.p0)))?;
-        set(a + 2, k.set_arg(a + 2, f4(camera.du)))?;
-        set(a + 3, k.set_arg(a + 3, f4(camera.dv)))?;
-        set(a + 4, k.set_arg(a + 4, width))?;
-        set(a + 7, k.set_arg(a + 7, shade.shade.code()))?;
-        set(a + 8, k.set_arg(a + 8, shade.near))?;
-        set(a + 9, k.set_arg(a + 9, shade.far))?;
-        set(a + 10, k.set_arg(a + 10, &hits.buffer))?;
-        set(a + 11, k.set_arg(a + 11, hits.pitch as u32))?;
-        set(a + 12, k.set_arg(a + 12, &colors.buffer))?;
-        set(a + 13, k.set_arg(a + 13, colors.pitch as u32))?;
+        // The band (row0, row_end) changes from launch to launch.
+        let mut params = TracePrimaryParams {
+            eye: f4(camera.eye),
+            p0: f4(camera.p0),
+            du: f4(camera.du),
+            dv: f4(camera.dv),
+            width,
+            row0: 0,
+            row_end: 0,
+            shade: shade.shade.code(),
+            near: shade.near,
+            far: shade.far,
+            hits: Some(&hits.buffer),
+            hit_pitch: hits.pitch as u32,
+            colors: Some(&colors.buffer),
+            color_pitch: colors.pitch as u32,
+        };
         self.scene.clear_status(device)?;
 
         let local = self.local;
@@ -513,8 +673,14 @@ impl<'d> ClTracer<'d> {
         while y0 < h {
             let rows = self.bands.next_rows(w, h - y0).min(band_capacity);
             // Work-items past the band (the global size is rounded up) return at once.
-            set(a + 5, k.set_arg(a + 5, y0 as u32))?;
-            set(a + 6, k.set_arg(a + 6, (y0 + rows) as u32))?;
+            params.row0 = y0 as u32;
+            params.row_end = (y0 + rows) as u32;
+            params.set(k).map_err(|e| {
+                device.error(
+                    &format!("setting the arguments of {}", Kernel::TracePrimary.name()),
+                    e,
+                )
+            })?;
             let ms = launch_rows(device, k, local, w, y0, rows)?;
             times.kernel_ms += ms;
             times.launches += 1;
@@ -560,7 +726,7 @@ impl<'d> ClTracer<'d> {
 
     /// [`ClTracer::trace_rays`] with the kernel's device time and the read-back's wall time
     /// (the upload of the rays is in neither).
-    pub fn trace_rays_timed(
+    pub(crate) fn trace_rays_timed(
         &mut self,
         rays: &[Ray],
         t_max: f32,
@@ -586,19 +752,22 @@ impl<'d> ClTracer<'d> {
             .len(rays.len())
             .build()
             .map_err(|e| device.error("allocating the hit buffer", e))?;
-        let mut builder = kernel_builder(device, &self.program, "trace_rays", &self.scene);
-        builder
-            .arg(&input)
-            .arg(rays.len() as u32)
-            .arg(any_hit as i32)
-            .arg(&output);
+        let kernel = Kernel::TraceRays;
+        let params = TraceRaysParams {
+            rays: &input,
+            count: rays.len() as u32,
+            any_hit: any_hit as i32,
+            hits: &output,
+        };
+        let mut builder = kernel_builder(device, &self.program, kernel, &self.scene)?;
+        params.bind(&mut builder);
         let local = self.local[0] * self.local[1];
         builder
             .global_work_size(rays.len().div_ceil(local) * local)
             .local_work_size(local);
         let kernel = builder
             .build()
-            .map_err(|e| device.error("creating the trace_rays kernel", e))?;
+            .map_err(|e| device.error(&format!("creating the {} kernel", kernel.name()), e))?;
         self.scene.clear_status(device)?;
         let kernel_ms = launch(device, kernel.cmd())?;
         let start = Instant::now();
@@ -618,11 +787,6 @@ impl<'d> ClTracer<'d> {
 }
 
 impl Scene {
-    /// How many kernel arguments the scene takes (they come first).
-    fn arg_count(&self) -> u32 {
-        if self.bvh.is_some() { 3 } else { 2 }
-    }
-
     fn clear_status(&self, device: &ClDevice) -> Result<()> {
         if let Some(DeviceBvh { status, .. }) = &self.bvh {
             status
@@ -652,26 +816,61 @@ impl Scene {
     }
 }
 
-/// A kernel builder with the scene's arguments in place.
+/// Refuses a program compiled for another scene than the tracer's: a BVH in `layout`, or
+/// for `None` every triangle.
+fn check_program(program: &Program, layout: Option<Layout>) -> Result<()> {
+    if program.layout() == layout {
+        return Ok(());
+    }
+    let scene = |layout: Option<Layout>| match layout {
+        Some(layout) => format!("a BVH in the {} layout", layout.name()),
+        None => "brute force".to_string(),
+    };
+    Err(Error::Invalid(format!(
+        "the kernels were compiled for {}, but the tracer is for {}",
+        scene(program.layout()),
+        scene(layout)
+    )))
+}
+
+/// Refuses a sampling kernel from a program compiled without sampling.
+fn require_kernel(program: &Program, kernel: Kernel) -> Result<()> {
+    if kernel.is_sampling() && !program.has_sampling() {
+        return Err(Error::Invalid(format!(
+            "the {} kernel is not in this program: it was compiled without sampling",
+            kernel.name()
+        )));
+    }
+    Ok(())
+}
+
+/// A builder of `kernel` of `program` with the scene's parameters bound (by name).
 fn kernel_builder<'b>(
     device: &ClDevice,
-    program: &'b ocl::Program,
-    name: &str,
+    program: &'b Program,
+    kernel: Kernel,
     scene: &'b Scene,
-) -> ocl::builders::KernelBuilder<'b> {
+) -> Result<ocl::builders::KernelBuilder<'b>> {
+    require_kernel(program, kernel)?;
     let mut builder = ocl::Kernel::builder();
     builder
-        .program(program)
-        .name(name)
+        .program(program.ocl())
+        .name(kernel.name())
         .queue(device.queue.clone());
     match &scene.bvh {
-        None => builder.arg(&scene.triangles).arg(scene.count),
-        Some(bvh) => builder
-            .arg(&bvh.nodes)
-            .arg(&scene.triangles)
-            .arg(&bvh.status),
-    };
-    builder
+        None => BruteSceneParams {
+            tris: &scene.triangles,
+            tri_count: scene.count,
+        }
+        .bind(&mut builder),
+        Some(bvh) => BvhSceneParams {
+            nodes: &bvh.nodes,
+            tris: &scene.triangles,
+            status: &bvh.status,
+        }
+        .bind(&mut builder),
+    }
+    Ok(builder)
 }
 
 /// Enqueues a kernel, waits for it, and returns its device time in milliseconds.

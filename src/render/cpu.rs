@@ -39,7 +39,7 @@ pub fn render(
 }
 
 /// The hit record and colour for one ray, exactly as `store_pixel` in cl/shade.cl.
-pub fn pixel(tracer: &impl ClosestHit, ray: &Ray, shade: &ShadeParams) -> (Hit, u32) {
+pub(crate) fn pixel(tracer: &impl ClosestHit, ray: &Ray, shade: &ShadeParams) -> (Hit, u32) {
     match tracer.closest_hit(ray, f32::INFINITY) {
         None => (Hit::NONE, BACKGROUND),
         Some((i, t)) => {

@@ -30,14 +30,6 @@ pub enum Light {
     Point(Vec3),
 }
 
-impl Light {
-    /// The default: a directional light from above, left and in front (+z, where the auto
-    /// framing puts the eye).
-    pub fn default_sun() -> Self {
-        Light::Directional(Vec3::new(-0.4, 1.0, 0.6).normalize())
-    }
-}
-
 impl std::str::FromStr for Light {
     type Err = String;
 
@@ -91,15 +83,15 @@ pub struct SampleSettings {
 /// The emitting triangles, for next-event estimation: indices into the tracer's triangles
 /// and the cumulative distribution of their areas.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Emitters {
-    pub triangles: Vec<u32>,
+pub(crate) struct Emitters {
+    pub(crate) triangles: Vec<u32>,
     /// `cdf[i]`: the area of emitters 0..=i over the total, the last one exactly 1.
-    pub cdf: Vec<f32>,
-    pub total_area: f32,
+    pub(crate) cdf: Vec<f32>,
+    pub(crate) total_area: f32,
 }
 
 impl Emitters {
-    pub fn new(triangles: &[Triangle], materials: &[Material]) -> Self {
+    pub(crate) fn new(triangles: &[Triangle], materials: &[Material]) -> Self {
         let mut list = Vec::new();
         let mut areas = Vec::new();
         for (i, t) in triangles.iter().enumerate() {
@@ -133,12 +125,12 @@ impl Emitters {
         }
     }
 
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.triangles.is_empty()
     }
 
     /// The emitter whose CDF interval holds `u` (binary search, as the kernel does).
-    pub fn pick(&self, u: f32) -> usize {
+    pub(crate) fn pick(&self, u: f32) -> usize {
         let (mut lo, mut hi) = (0usize, self.cdf.len() - 1);
         while lo < hi {
             let mid = (lo + hi) / 2;
@@ -154,7 +146,7 @@ impl Emitters {
 
 /// The sky seen by rays that leave a scene without emitters: white at the horizon, blue
 /// overhead, grey below.
-pub fn sky(d: Vec3) -> Vec3 {
+pub(crate) fn sky(d: Vec3) -> Vec3 {
     let up = d.y / d.length();
     if up >= 0.0 {
         Vec3::ONE.lerp(Vec3::new(0.45, 0.65, 1.0), up)
@@ -164,7 +156,7 @@ pub fn sky(d: Vec3) -> Vec3 {
 }
 
 /// The ray of pixel (x, y), jittered within the pixel by the sampler's first two numbers.
-pub fn jittered_ray(camera: &Pinhole, x: u32, y: u32, s: &Sampler) -> Ray {
+pub(crate) fn jittered_ray(camera: &Pinhole, x: u32, y: u32, s: &Sampler) -> Ray {
     let fx = x as f32 + s.get(0);
     let fy = y as f32 + s.get(1);
     let d = |k: usize| (camera.p0[k] + fx * camera.du[k]) + fy * camera.dv[k];
@@ -175,7 +167,7 @@ pub fn jittered_ray(camera: &Pinhole, x: u32, y: u32, s: &Sampler) -> Ray {
 }
 
 /// The unit geometric normal of `t`, turned to face `dir`'s origin side.
-pub fn facing_normal(t: &Triangle, dir: Vec3) -> Vec3 {
+pub(crate) fn facing_normal(t: &Triangle, dir: Vec3) -> Vec3 {
     let v0 = Vec3::from(t.v0);
     let n = (Vec3::from(t.v1) - v0)
         .cross(Vec3::from(t.v2) - v0)
@@ -184,7 +176,7 @@ pub fn facing_normal(t: &Triangle, dir: Vec3) -> Vec3 {
 }
 
 /// One sample of pixel (x, y): its radiance and the number of rays traced for it.
-pub fn sample_pixel(
+pub(crate) fn sample_pixel(
     tracer: &(impl ClosestHit + ?Sized),
     materials: &[Material],
     emitters: &Emitters,
@@ -312,8 +304,8 @@ pub fn sample_pixel(
 /// Per-pixel sums of radiance with their sample counts, and the rays traced for them.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Accumulation {
-    pub width: u32,
-    pub height: u32,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
     /// Red, green, blue sums and the number of samples, per pixel, row-major.
     pub pixels: Vec<[f32; 4]>,
     pub rays: u64,
@@ -347,7 +339,7 @@ impl Accumulation {
 /// Samples `spp` of every pixel on the host (rayon over rows). `stop`, once set, ends the
 /// work after the rows under way; each pixel keeps the samples it got.
 #[allow(clippy::too_many_arguments)]
-pub fn render_samples(
+pub(crate) fn render_samples(
     tracer: &(impl ClosestHit + ?Sized),
     materials: &[Material],
     emitters: &Emitters,

@@ -52,11 +52,11 @@ impl Method {
         }
     }
 
-    pub fn uses_opencl(self) -> bool {
+    pub(crate) fn uses_opencl(self) -> bool {
         matches!(self, Method::ClBrute | Method::ClBvh)
     }
 
-    pub fn uses_bvh(self) -> bool {
+    pub(crate) fn uses_bvh(self) -> bool {
         matches!(self, Method::CpuBvh | Method::ClBvh)
     }
 }
@@ -183,7 +183,7 @@ pub struct Hit {
 }
 
 impl Hit {
-    pub const NONE: Hit = Hit {
+    pub(crate) const NONE: Hit = Hit {
         prim: MISS,
         t: f32::INFINITY,
     };
@@ -203,11 +203,11 @@ pub struct Frame {
     pub colors: Vec<u32>,
     /// Linear radiance per pixel, for the progressive shade modes (the colours are then its
     /// tone-mapped form).
-    pub radiance: Option<Vec<[f32; 3]>>,
+    pub(crate) radiance: Option<Vec<[f32; 3]>>,
 }
 
 impl Frame {
-    pub fn new(width: u32, height: u32) -> Self {
+    pub(crate) fn new(width: u32, height: u32) -> Self {
         let n = width as usize * height as usize;
         Frame {
             width,
@@ -223,7 +223,7 @@ impl Frame {
     }
 
     /// The colours as an RGB image.
-    pub fn to_rgb_image(&self) -> image::RgbImage {
+    pub(crate) fn to_rgb_image(&self) -> image::RgbImage {
         let bytes = self
             .colors
             .iter()

@@ -9,7 +9,7 @@ use glam::Vec3;
 /// Chris Wellons' `lowbias32` integer hash: every input bit flips each output bit with
 /// probability close to one half.
 #[inline]
-pub fn hash(mut x: u32) -> u32 {
+pub(crate) fn hash(mut x: u32) -> u32 {
     x ^= x >> 16;
     x = x.wrapping_mul(0x7feb_352d);
     x ^= x >> 15;
@@ -20,12 +20,12 @@ pub fn hash(mut x: u32) -> u32 {
 
 /// The random stream of one sample of one pixel.
 #[derive(Clone, Copy, Debug)]
-pub struct Sampler {
+pub(crate) struct Sampler {
     key: u32,
 }
 
 impl Sampler {
-    pub fn new(seed: u32, pixel: u32, sample: u32) -> Self {
+    pub(crate) fn new(seed: u32, pixel: u32, sample: u32) -> Self {
         Sampler {
             key: hash(hash(hash(seed ^ 0x9e37_79b9) ^ pixel) ^ sample),
         }
@@ -33,7 +33,7 @@ impl Sampler {
 
     /// Dimension `dim` of the stream, uniform in [0, 1).
     #[inline]
-    pub fn get(&self, dim: u32) -> f32 {
+    pub(crate) fn get(&self, dim: u32) -> f32 {
         (hash(self.key ^ dim.wrapping_mul(0x85eb_ca6b)) >> 8) as f32 * (1.0 / 16_777_216.0)
     }
 }
@@ -42,13 +42,13 @@ impl Sampler {
 pub const DIMS_PER_BOUNCE: u32 = 8;
 
 /// The first dimension of bounce `b`.
-pub fn bounce_dim(b: u32) -> u32 {
+pub(crate) fn bounce_dim(b: u32) -> u32 {
     2 + b * DIMS_PER_BOUNCE
 }
 
 /// A unit direction about the unit normal `n`, cosine-weighted (pdf cos / pi), from two
 /// uniform numbers, through the orthonormal basis of Duff et al. (JCGT 2017).
-pub fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
+pub(crate) fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
     let r = u1.sqrt();
     let phi = 2.0 * std::f32::consts::PI * u2;
     let (x, y) = (r * phi.cos(), r * phi.sin());
@@ -58,7 +58,7 @@ pub fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
 }
 
 /// Two unit vectors completing `n` to an orthonormal basis (Duff et al. 2017).
-pub fn basis(n: Vec3) -> (Vec3, Vec3) {
+pub(crate) fn basis(n: Vec3) -> (Vec3, Vec3) {
     let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
     let a = -1.0 / (sign + n.z);
     let b = n.x * n.y * a;
@@ -69,7 +69,7 @@ pub fn basis(n: Vec3) -> (Vec3, Vec3) {
 }
 
 /// A uniform point on the triangle (a, b, c) from two uniform numbers.
-pub fn triangle_point(a: Vec3, b: Vec3, c: Vec3, u1: f32, u2: f32) -> Vec3 {
+pub(crate) fn triangle_point(a: Vec3, b: Vec3, c: Vec3, u1: f32, u2: f32) -> Vec3 {
     let su = u1.sqrt();
     let (w0, w1) = (1.0 - su, u2 * su);
     a * w0 + b * w1 + c * (1.0 - w0 - w1)

@@ -11,9 +11,9 @@ use crate::intersect::Triangle;
 /// maps to white..black (the scene's bounding sphere seen from the eye).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadeParams {
-    pub shade: Shade,
-    pub near: f32,
-    pub far: f32,
+    pub(crate) shade: Shade,
+    pub(crate) near: f32,
+    pub(crate) far: f32,
 }
 
 impl ShadeParams {
@@ -26,7 +26,7 @@ impl ShadeParams {
     }
 
     /// The packed RGBA colour of a hit on `tri` at `distance` along `dir`.
-    pub fn color(&self, tri: &Triangle, distance: f32, dir: Vec3) -> u32 {
+    pub(crate) fn color(&self, tri: &Triangle, distance: f32, dir: Vec3) -> u32 {
         let v0 = Vec3::from(tri.v0);
         let e1 = Vec3::from(tri.v1) - v0;
         let e2 = Vec3::from(tri.v2) - v0;
@@ -52,7 +52,7 @@ impl ShadeParams {
 }
 
 /// Black, opaque: the colour of a miss.
-pub const BACKGROUND: u32 = 0xFF00_0000;
+pub(crate) const BACKGROUND: u32 = 0xFF00_0000;
 
 fn quantize(v: f32) -> u32 {
     // clamp() in OpenCL returns the lower bound for NaN; so does this.

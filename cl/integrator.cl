@@ -1,10 +1,32 @@
-/* sample.cl: the progressive shade modes, one sample per pixel per launch, added to a
- * pitched float4 accumulation image (radiance sums, and the sample count in w). Mirrors
- * src/render/integrator.rs. Compiled, like trace.cl, against the BVH or every triangle. */
-#include "cltrace.h"
+/* integrator.cl: the progressive shade modes (ambient occlusion, a light with hard
+ * shadows, diffuse path tracing), one sample per pixel per launch, added to a pitched
+ * float4 accumulation image (radiance sums, and the sample count in w). Mirrored by
+ * src/render/integrator.rs, whence SHADOW_AMBIENT and ROULETTE_AFTER come. Compiled, like
+ * trace.cl, against a BVH or every triangle, into programs built with sampling; the host
+ * binds the parameters by name (src/device/tracer.rs; tests/layout.rs compares them). */
 
-#define SHADOW_AMBIENT 0.1f
-#define ROULETTE_AFTER 3u
+/* The ray direction of pixel (x, y) jittered within the pixel. */
+FORCE_INLINE float3 jittered_ray(float4 p0, float4 du, float4 dv, uint x, uint y, uint key) {
+    float fx = (float)x + sample_1d(key, 0u);
+    float fy = (float)y + sample_1d(key, 1u);
+    return (float3)((p0.x + fx * du.x) + fy * dv.x,
+                    (p0.y + fx * du.y) + fy * dv.y,
+                    (p0.z + fx * du.z) + fy * dv.z);
+}
+
+/* The unit geometric normal of tri, turned to face dir's origin side. */
+FORCE_INLINE float3 facing_normal(const __global Triangle* tri, float3 dir) {
+    float3 v0 = load3(tri->v0);
+    float3 n = normalize(cross(load3(tri->v1) - v0, load3(tri->v2) - v0));
+    return dot(n, dir) > 0.0f ? -n : n;
+}
+
+/* The sky of scenes without emitters: white at the horizon, blue overhead, grey below. */
+FORCE_INLINE float3 sky(float3 d) {
+    float up = d.y / length(d);
+    return up >= 0.0f ? mix((float3)(1.0f), (float3)(0.45f, 0.65f, 1.0f), up)
+                      : mix((float3)(1.0f), (float3)(0.35f), -up);
+}
 
 /* What the shade modes read besides the geometry: materials, and the emitting triangles
  * (indices into tris) with the cumulative distribution of their areas. */

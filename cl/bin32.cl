@@ -1,0 +1,67 @@
+/* bin32.cl: the traversal of the thesis's layout, 32-byte binary nodes (Bin32Node) in
+ * depth-first order; mirrored step for step by the host's traversal in src/bvh/bin32.rs. */
+
+#ifndef LAYOUT_BIN32
+#error "bin32.cl is one layout's traversal: its program is built with -D LAYOUT_BIN32 (src/device/program.rs)"
+#endif
+
+#define SCENE_PARAMS __global const Bin32Node* nodes, __global const Triangle* tris, __global uint* status
+#define SCENE nodes, tris, status
+
+/* Entry distance into `node`'s box if the ray meets it before t_max, else -1. */
+FORCE_INLINE float hit_box(const __global Bin32Node* node, float3 org, float3 inv, float t_max) {
+    const __global float4* row = (const __global float4*)node;
+    return box_entry(row[0].xyz, row[1].xyz, org, inv, t_max);
+}
+
+/* The contract of every trace (traverse.cl), with a stack in private memory, nearer child
+ * first, boxes beyond the closest hit skipped; mirrors src/bvh/bin32.rs step for step.
+ * The stack holds STACK_SIZE entries, the tree's depth, which a traversal never needs
+ * more than; should it anyway, STATUS_STACK_OVERFLOW is set and the ray reported a miss. */
+FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, bool incoherent, float* t_hit) {
+    WatertightRay ray = watertight_ray(org, dir);
+    float3 inv = safe_inverse(dir);
+    float t = t_max;
+    uint best = MISS;
+    uint stack_node[STACK_SIZE];
+    float stack_entry[STACK_SIZE];
+    uint sp = 0;
+    uint node = 0;
+    bool live = hit_box(&nodes[0], org, inv, t) >= 0.0f;
+    while (live) {
+        const __global Bin32Node* n = &nodes[node];
+        bool descend = false;
+        if (n->right_or_count & LEAF_FLAG) {
+            TEST_LEAF(n->left_or_first, n->right_or_count & ~LEAF_FLAG);
+        } else {
+            uint l = n->left_or_first, r = n->right_or_count;
+            float tl = hit_box(&nodes[l], org, inv, t);
+            float tr = hit_box(&nodes[r], org, inv, t);
+            if (tl >= 0.0f && tr >= 0.0f) {
+                if (sp >= STACK_SIZE) { atomic_or(status, STATUS_STACK_OVERFLOW); return MISS; }
+                bool right_first = tr < tl;
+                stack_node[sp] = right_first ? l : r;
+                stack_entry[sp] = right_first ? tl : tr;
+                ++sp;
+                node = right_first ? r : l;
+                descend = true;
+            } else if (tl >= 0.0f) {
+                node = l;
+                descend = true;
+            } else if (tr >= 0.0f) {
+                node = r;
+                descend = true;
+            }
+        }
+        if (!descend) {
+            /* Pop the next node still nearer than the closest hit. */
+            live = false;
+            while (sp > 0) {
+                --sp;
+                if (stack_entry[sp] <= t) { node = stack_node[sp]; live = true; break; }
+            }
+        }
+    }
+    *t_hit = t;
+    return best;
+}

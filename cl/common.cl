@@ -1,0 +1,45 @@
+/* common.cl: what every cltrace program starts with, after the constants the host writes
+ * in front of it (MISS, LEAF_FLAG, SHADE_* and the rest: generated from their Rust
+ * definitions by src/device/program.rs, pinned by tests/layout.rs). It holds the
+ * floating-point contract, the inlining attribute, and the structs every kernel reads:
+ * Triangle (src/intersect.rs), Material (src/material.rs) and Hit (src/render/mod.rs),
+ * each mirroring the #[repr(C)] Rust struct of its name; tests/layout.rs pins their sizes
+ * and field offsets on both sides through probe.cl. The arithmetic of every file mirrors
+ * the Rust CPU reference operation for operation, so that a device and the host pick the
+ * same triangle for every pixel. */
+
+/* a * b + c must round twice, exactly as on the host: no fused multiply-adds. */
+#pragma OPENCL FP_CONTRACT OFF
+
+/* Every helper is inlined: PoCL 3.1 kept intersect_triangle a call inside the traversal
+ * loop, and forcing it was measured faster there (docs/performance.md, "Kernel changes,
+ * measured"); NVIDIA inlines them anyway. */
+#define FORCE_INLINE inline __attribute__((always_inline))
+
+/* A triangle as the intersector reads it: three corners, each padded to 16 bytes so that a
+ * corner is one vector load. `prim` is the triangle's index in file order, `material` its
+ * index into the Material array. */
+typedef struct {
+    float v0[3]; uint prim;
+    float v1[3]; uint material;
+    float v2[3]; uint pad;
+} Triangle;
+
+/* A diffuse material: albedo and emitted radiance. */
+typedef struct {
+    float albedo[3]; float pad0;
+    float emission[3]; float pad1;
+} Material;
+
+/* One pixel's closest hit: the triangle's index in file order (MISS for none) and the
+ * distance from the eye along the ray (+inf for a miss). */
+typedef struct {
+    uint prim;
+    float t;
+} Hit;
+
+/* The three floats from p, as one vector. */
+FORCE_INLINE float3 load3(const __global float* p) { return (float3)(p[0], p[1], p[2]); }
+
+/* |d|, summed in the host's order (src/render/mod.rs scales distances by it). */
+FORCE_INLINE float length3(float3 d) { return sqrt(d.x * d.x + d.y * d.y + d.z * d.z); }

@@ -1,0 +1,86 @@
+/* intersect.cl: the watertight ray/triangle test (Woop, Benthin, Wald 2013) and the robust
+ * slab test of boxes, mirrored operation for operation by src/intersect.rs
+ * (WatertightRay, RayBox). ROBUST_EXIT comes from the host (src/intersect.rs). */
+
+/* Component k (0: x, 1: y, 2: z) of v. */
+FORCE_INLINE float pick(float3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
+
+/* Per-ray constants of the watertight ray/triangle test (Woop, Benthin, Wald 2013):
+ * kz is the dominant axis of the direction, (kx, ky) the other two in an order that keeps
+ * the winding, and the shear maps the ray onto +z. */
+typedef struct {
+    float3 org;
+    int kx, ky, kz;
+    float sx, sy, sz;
+} WatertightRay;
+
+FORCE_INLINE WatertightRay watertight_ray(float3 org, float3 dir) {
+    WatertightRay r;
+    float ax = fabs(dir.x), ay = fabs(dir.y), az = fabs(dir.z);
+    int kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
+    int kx = kz == 2 ? 0 : kz + 1;
+    int ky = kx == 2 ? 0 : kx + 1;
+    float dz = pick(dir, kz);
+    if (dz < 0.0f) { int swap = kx; kx = ky; ky = swap; }
+    r.org = org;
+    r.kx = kx; r.ky = ky; r.kz = kz;
+    r.sx = pick(dir, kx) / dz;
+    r.sy = pick(dir, ky) / dz;
+    r.sz = 1.0f / dz;
+    return r;
+}
+
+/* Ray parameter of the hit with triangle (v0, v1, v2) if it is closer than t_max, else a
+ * negative number. Watertight: a ray through a shared edge or vertex hits at least one of
+ * the triangles. Zero-area triangles never hit. */
+FORCE_INLINE float intersect_triangle(const WatertightRay* r, float3 v0, float3 v1, float3 v2, float t_max) {
+    float3 a = v0 - r->org, b = v1 - r->org, c = v2 - r->org;
+    float a_z = pick(a, r->kz), b_z = pick(b, r->kz), c_z = pick(c, r->kz);
+    float ax = pick(a, r->kx) - r->sx * a_z, ay = pick(a, r->ky) - r->sy * a_z;
+    float bx = pick(b, r->kx) - r->sx * b_z, by = pick(b, r->ky) - r->sy * b_z;
+    float cx = pick(c, r->kx) - r->sx * c_z, cy = pick(c, r->ky) - r->sy * c_z;
+    float u = cx * by - cy * bx;
+    float v = ax * cy - ay * cx;
+    float w = bx * ay - by * ax;
+    if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return -1.0f;
+    float det = u + v + w;
+    if (det == 0.0f) return -1.0f;
+    float t = u * (r->sz * a_z) + v * (r->sz * b_z) + w * (r->sz * c_z);
+    if (det > 0.0f ? !(t > 0.0f && t < t_max * det) : !(t < 0.0f && t > t_max * det)) return -1.0f;
+    return t / det;
+}
+
+/* 1 / dir per component: a zero component gives an infinite inverse. Where the origin lies
+ * in that slab's plane, 0 * inf makes the slab's distances NaN, which fmin and fmax skip, so
+ * a ray lying in a box face's plane counts as inside the slab (RayBox in src/intersect.rs). */
+FORCE_INLINE float3 safe_inverse(float3 d) {
+    return (float3)(1.0f / d.x, 1.0f / d.y, 1.0f / d.z);
+}
+
+/* A stored triangle is three 16-byte rows (v0 prim, v1 material, v2 pad), 16-byte aligned
+ * in its buffer: three vector loads instead of nine scalar ones. */
+FORCE_INLINE float intersect_stored(const WatertightRay* r, const __global Triangle* tri, float t_max) {
+    const __global float4* row = (const __global float4*)tri;
+    return intersect_triangle(r, row[0].xyz, row[1].xyz, row[2].xyz, t_max);
+}
+
+
+/* The inverse used for near planes: where a subnormal (or zero) direction component made
+ * the inverse infinite, +-FLT_MAX, an entry no later than the true one (the far planes keep
+ * the infinity, an exit no earlier): both err towards visiting the box. */
+FORCE_INLINE float3 near_inverse(float3 inv) {
+    return select(inv, copysign((float3)(FLT_MAX), inv), isinf(inv));
+}
+
+/* Entry distance into the box [lo, hi] if the ray meets it before t_max, else -1: the
+ * robust slab test of RayBox::hit in src/intersect.rs. */
+FORCE_INLINE float box_entry(float3 lo, float3 hi, float3 org, float3 inv, float t_max) {
+    /* Each slab's near and far planes are picked by the inverse's sign, not by comparing
+     * distances, so that a NaN never stands in for the wrong one; fmin and fmax skip NaNs. */
+    int3 back = signbit(inv);
+    float3 tn = (select(lo, hi, back) - org) * near_inverse(inv);
+    float3 tf = (select(hi, lo, back) - org) * inv;
+    float near = fmax(fmax(tn.x, tn.y), fmax(tn.z, 0.0f));
+    float far = fmin(fmin(fmin(tf.x, tf.y), tf.z) * ROBUST_EXIT, t_max);
+    return near <= far ? near : -1.0f;
+}

@@ -1,0 +1,46 @@
+/* sampling.cl: random numbers and the sampling of directions and points, mirrored by
+ * src/render/sampling.rs so that the host reference and the devices draw the same numbers.
+ * DIMS_PER_BOUNCE comes from the host (src/render/sampling.rs). */
+
+/* Chris Wellons' lowbias32 integer hash. */
+FORCE_INLINE uint hash_u32(uint x) {
+    x ^= x >> 16; x *= 0x7feb352du;
+    x ^= x >> 15; x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+
+/* A counter-based random stream: a number is a hash of (seed, pixel, sample, dimension). */
+FORCE_INLINE uint sampler_key(uint seed, uint pixel, uint sample) {
+    return hash_u32(hash_u32(hash_u32(seed ^ 0x9e3779b9u) ^ pixel) ^ sample);
+}
+
+/* Dimension `dim` of the stream `key`: a float in [0, 1). */
+FORCE_INLINE float sample_1d(uint key, uint dim) {
+    return (float)(hash_u32(key ^ (dim * 0x85ebca6bu)) >> 8) * (1.0f / 16777216.0f);
+}
+
+/* The first dimension of bounce b: 0-1 jitter the pixel, then DIMS_PER_BOUNCE per bounce. */
+FORCE_INLINE uint bounce_dim(uint b) { return 2u + b * DIMS_PER_BOUNCE; }
+
+/* A cosine-weighted unit direction about the unit normal n (Duff et al. 2017 basis). */
+FORCE_INLINE float3 cosine_direction(float3 n, float u1, float u2) {
+    float r = sqrt(u1);
+    float phi = 2.0f * M_PI_F * u2;
+    float x = r * cos(phi), y = r * sin(phi);
+    float z = sqrt(fmax(1.0f - u1, 0.0f));
+    float sign = n.z >= 0.0f ? 1.0f : -1.0f;
+    float a = -1.0f / (sign + n.z);
+    float b = n.x * n.y * a;
+    float3 t = (float3)(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    float3 bt = (float3)(b, sign + n.y * n.y * a, -n.y);
+    return t * x + bt * y + n * z;
+}
+
+/* A uniform point on the triangle (a, b, c). */
+FORCE_INLINE float3 triangle_point(float3 a, float3 b, float3 c, float u1, float u2) {
+    float su = sqrt(u1);
+    float w0 = 1.0f - su, w1 = u2 * su;
+    return a * w0 + b * w1 + c * (1.0f - w0 - w1);
+}
+

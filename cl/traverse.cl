@@ -1,0 +1,45 @@
+/* traverse.cl: what the traversals of every BVH layout share: the scene's stack size and
+ * error flag, and the leaf tests, written as macros over the traversal's own variables
+ * (ray, tris, t, best, any_hit, t_hit); the host's traversal (Bin32Bvh, src/bvh/) does the
+ * same inline. STATUS_STACK_OVERFLOW comes from the host (src/device/tracer.rs).
+ *
+ * A program is compiled for one scene: a BVH program has STACK_SIZE defined (the
+ * traversal stack's entries) and one layout's files after this one, a brute-force program
+ * brute.cl instead. Each defines SCENE_PARAMS, the scene's kernel parameters, and SCENE,
+ * which passes them on, so that every kernel is written once; and the scene's trace:
+ *
+ *   uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit,
+ *              bool incoherent, float* t_hit)
+ *
+ * returns the triangle (index into tris) the ray (org, dir) hits first in (0, t_max), or
+ * with any_hit the first one found at all; MISS for none; *t_hit gets the ray parameter.
+ * `incoherent` (a constant at every call) says whether the rays of neighbouring work-items
+ * go different ways (bounces, ambient occlusion, arbitrary rays) rather than together
+ * (camera rays): a layout may pick its traversal by it; the result is the same either way.
+ * A traversal whose stack would overflow sets STATUS_STACK_OVERFLOW in *status and reports
+ * a miss, never writing out of bounds. */
+
+#ifndef STACK_SIZE
+#error "a BVH program needs STACK_SIZE (src/device/program.rs passes it)"
+#endif
+
+/* Keeps a triangle test's result h (negative: no hit) for triangle `index` as the closest
+ * hit so far (t, best); with any_hit, the first hit ends the traversal. */
+#define KEEP_HIT(h, index)                                               \
+    if ((h) >= 0.0f) {                                                   \
+        t = (h);                                                         \
+        best = (index);                                                  \
+        if (any_hit) { *t_hit = t; return best; }                        \
+    }
+
+/* Tests triangle `index` against the closest hit so far. */
+#define TEST_TRIANGLE(index)                                             \
+    {                                                                    \
+        uint j_ = (index);                                               \
+        float h_ = intersect_stored(&ray, &tris[j_], t);                 \
+        KEEP_HIT(h_, j_)                                                 \
+    }
+
+/* Tests a leaf's triangles [first, first + count). */
+#define TEST_LEAF(first, count)                                          \
+    for (uint i_ = (first), end_ = (first) + (count); i_ < end_; ++i_) TEST_TRIANGLE(i_)
