@@ -7,6 +7,8 @@ use crate::intersect::{ClosestHit, Triangle, WatertightRay};
 
 /// Every ray against every triangle, the first in order winning a tie.
 pub struct BruteForce {
+    /// The triangles to test, in the order ties are decided (file order, as
+    /// [`crate::intersect::triangles_in_order`] gives them); hits index into this list.
     pub triangles: Vec<Triangle>,
 }
 

@@ -20,12 +20,18 @@ pub const DEFAULT_HEIGHT: u32 = 720;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraSettings {
+    /// Eye position in world space; auto: on +z from the look-at point, far enough back
+    /// that the mesh's bounding sphere fits the field of view.
     pub eye: Option<[f32; 3]>,
+    /// The point the camera looks at, in world space; auto: the centre of the mesh's box.
     pub look_at: Option<[f32; 3]>,
+    /// Up hint, any length but not parallel to the view direction; auto: +y.
     pub up: Option<[f32; 3]>,
-    /// Vertical field of view in degrees.
+    /// Vertical field of view in degrees, in (0, 180); auto: 45.
     pub fov: Option<f32>,
+    /// Image width in pixels (1 to 16384); default 1280.
     pub width: Option<u32>,
+    /// Image height in pixels (1 to 16384); default 720.
     pub height: Option<u32>,
 }
 
@@ -51,7 +57,9 @@ pub struct Camera {
     pub(crate) up: Vec3,
     /// Vertical field of view in degrees, in (0, 180).
     pub(crate) fov: f32,
+    /// Image width in pixels (1 to 16384).
     pub width: u32,
+    /// Image height in pixels (1 to 16384).
     pub height: u32,
 }
 

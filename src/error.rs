@@ -8,9 +8,11 @@ pub enum Error {
     /// A mesh or scene file that cannot be read or makes no sense.
     #[error("{}: {message}", location(path, *line))]
     Input {
+        /// The mesh or scene file at fault.
         path: PathBuf,
         /// 1-based line, where the parser knows it.
         line: Option<usize>,
+        /// What is wrong, shown after `path:` (or `path:line:`).
         message: String,
     },
     /// A request that cannot be met: a bad camera, resolution or option value.
@@ -21,7 +23,12 @@ pub enum Error {
     Device(String),
     /// The output could not be written.
     #[error("{}: {message}", path.display())]
-    Output { path: PathBuf, message: String },
+    Output {
+        /// The file that could not be written (an image, a hit record, the tuning cache).
+        path: PathBuf,
+        /// Why, usually the operating system's reason.
+        message: String,
+    },
 }
 
 fn location(path: &Path, line: Option<usize>) -> String {
@@ -65,4 +72,5 @@ impl Error {
     }
 }
 
+/// The crate's result: [`Error`] unless said otherwise.
 pub type Result<T, E = Error> = std::result::Result<T, E>;

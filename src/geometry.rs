@@ -6,11 +6,14 @@ use glam::{Vec3, Vec3A};
 /// unnormalised pixel direction so that the host and the device compute identical bits.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
+    /// Where the ray starts, in world space (`t = 0`).
     pub origin: Vec3,
+    /// The direction, not necessarily unit length; `t` is measured in multiples of it.
     pub dir: Vec3,
 }
 
 impl Ray {
+    /// The ray from `origin` along `dir`, taken as given (not normalised).
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
         Ray { origin, dir }
     }
@@ -24,7 +27,9 @@ impl Ray {
 /// growing it by any point gives that point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
+    /// The lowest corner: the smallest x, y and z inside the box (`+inf` when empty).
     pub min: Vec3,
+    /// The highest corner: the largest x, y and z inside the box (`-inf` when empty).
     pub max: Vec3,
 }
 
@@ -40,6 +45,7 @@ impl Aabb {
         max: Vec3::splat(f32::NEG_INFINITY),
     };
 
+    /// The smallest box holding every point; the empty box for no points.
     pub fn from_points(points: impl IntoIterator<Item = Vec3>) -> Self {
         points.into_iter().fold(Self::EMPTY, |b, p| b.grown(p))
     }
@@ -55,6 +61,7 @@ impl Aabb {
         self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
     }
 
+    /// The size along each axis, `max - min`; zero for an empty box.
     pub fn extent(&self) -> Vec3 {
         if self.is_empty() {
             Vec3::ZERO
@@ -63,6 +70,7 @@ impl Aabb {
         }
     }
 
+    /// The midpoint of `min` and `max`; NaN for an empty box.
     pub fn center(&self) -> Vec3 {
         (self.min + self.max) * 0.5
     }

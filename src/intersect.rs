@@ -20,11 +20,18 @@ use crate::mesh::Mesh;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Triangle {
+    /// First corner in world space; with `prim`, the first 16-byte row the kernels load.
     pub v0: [f32; 3],
+    /// The triangle's index in file order (into [`Mesh::triangles`]): what hits report.
     pub prim: u32,
+    /// Second corner; equal to `v0` for a zero-area triangle.
     pub v1: [f32; 3],
+    /// Index of the triangle's material in the array the shading kernels read
+    /// ([`crate::material::Materials::list`]); 0 until materials are assigned.
     pub material: u32,
+    /// Third corner; equal to `v0` for a zero-area triangle.
     pub v2: [f32; 3],
+    /// Padding of the third row to 16 bytes; always 0, read by no kernel.
     pub pad: u32,
 }
 
@@ -93,6 +100,9 @@ pub struct WatertightRay {
 }
 
 impl WatertightRay {
+    /// The constants for `ray`, as `watertight_ray` in `cl/cltrace.h` computes them: the
+    /// axis along which `dir` is largest in magnitude becomes z (the other two swapped when
+    /// `dir` points down it, keeping the winding), and the shear that maps `dir` onto it.
     pub fn new(ray: &Ray) -> Self {
         let dir = ray.dir.to_array();
         let (ax, ay, az) = (dir[0].abs(), dir[1].abs(), dir[2].abs());

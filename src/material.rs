@@ -14,13 +14,16 @@ pub(crate) const DEFAULT_ALBEDO: [f32; 3] = [0.7, 0.7, 0.7];
 pub struct Material {
     /// Diffuse reflectance per channel, in [0, 1].
     pub albedo: [f32; 3],
+    /// Padding of `albedo` to 16 bytes (one vector load); always 0.
     pub pad0: f32,
     /// Emitted radiance per channel (0 for surfaces that do not glow).
     pub emission: [f32; 3],
+    /// Padding of `emission` to 16 bytes (one vector load); always 0.
     pub pad1: f32,
 }
 
 impl Material {
+    /// A surface that reflects `albedo` and emits nothing.
     pub fn diffuse(albedo: [f32; 3]) -> Self {
         Material {
             albedo,
@@ -30,6 +33,7 @@ impl Material {
         }
     }
 
+    /// A surface that reflects `albedo` and emits `emission` (radiance per channel, >= 0).
     pub fn emitting(albedo: [f32; 3], emission: [f32; 3]) -> Self {
         Material {
             emission,
@@ -37,6 +41,8 @@ impl Material {
         }
     }
 
+    /// Whether any channel of the emission is positive: triangles with this material are
+    /// lights.
     pub fn emits(&self) -> bool {
         self.emission.iter().any(|&e| e > 0.0)
     }
@@ -51,6 +57,8 @@ impl Default for Material {
 /// The materials of a mesh: a list, and each triangle's index into it (file order).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Materials {
+    /// The materials triangles refer to by index; never empty as the loaders make it.
+    /// `list[0]` is what a triangle not covered by `per_triangle` uses.
     pub list: Vec<Material>,
     /// `per_triangle[i]` is triangle i's material; empty means every triangle uses `list[0]`.
     pub per_triangle: Vec<u32>,
@@ -83,10 +91,12 @@ impl Materials {
         self.per_triangle.get(triangle).copied().unwrap_or(0)
     }
 
+    /// Triangle `triangle`'s material (by file-order index).
     pub fn of(&self, triangle: usize) -> &Material {
         &self.list[self.index_of(triangle) as usize]
     }
 
+    /// Whether any material in the list emits, whether or not a triangle uses it.
     pub fn has_emitters(&self) -> bool {
         self.list.iter().any(Material::emits)
     }

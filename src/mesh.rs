@@ -17,11 +17,16 @@ pub(crate) const MAX_COORDINATE: f32 = 1e12;
 /// vertex a triangle uses is finite and within [`MAX_COORDINATE`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
+    /// The vertex positions in world space, indexed by [`Mesh::triangles`]. Vertices no
+    /// triangle uses are allowed and ignored.
     pub positions: Vec<Vec3>,
+    /// The triangles in input order, each as three indices into [`Mesh::positions`]; a
+    /// triangle's position in this list is its primitive index in every later stage.
     pub triangles: Vec<[u32; 3]>,
 }
 
 impl Mesh {
+    /// The mesh as given, unchecked: call [`Mesh::check`] before handing it on.
     pub fn new(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Self {
         Mesh {
             positions,
@@ -29,6 +34,7 @@ impl Mesh {
         }
     }
 
+    /// The number of triangles, degenerate ones included.
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()
     }

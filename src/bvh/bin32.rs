@@ -19,13 +19,20 @@ pub const LEAF_FLAG: u32 = 0x8000_0000;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Bin32Node {
+    /// The lowest corner of the node's box (a leaf's: tight around its triangles).
     pub min: [f32; 3],
+    /// Inner node: the left child's index, always the next node (depth-first order).
+    /// Leaf: the index of its first triangle in [`Bin32Bvh::triangles`].
     pub left_or_first: u32,
+    /// The highest corner of the node's box.
     pub max: [f32; 3],
+    /// Inner node: the right child's index (below [`LEAF_FLAG`]). Leaf: `LEAF_FLAG` ORed
+    /// with its triangle count (at least 1).
     pub right_or_count: u32,
 }
 
 impl Bin32Node {
+    /// Whether the node is a leaf: [`LEAF_FLAG`] is set in `right_or_count`.
     pub fn is_leaf(&self) -> bool {
         self.right_or_count & LEAF_FLAG != 0
     }
@@ -47,12 +54,16 @@ impl Bin32Node {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Bin32Bvh {
     pub(crate) nodes: Vec<Bin32Node>,
+    /// The mesh's triangles in leaf order, each carrying its file-order index: a leaf's
+    /// `left_or_first` and every hit index into this list.
     pub triangles: Vec<Triangle>,
     /// Nodes on the longest root-to-leaf path; a traversal stack of `depth` entries suffices.
     pub depth: u32,
 }
 
 impl Bin32Bvh {
+    /// Lays `bvh` out for the device: its nodes as built, and `mesh`'s triangles copied in
+    /// the order of [`Bvh::prim_order`] (materials all 0 until assigned).
     pub fn new(bvh: Bvh, mesh: &Mesh) -> Self {
         Bin32Bvh {
             triangles: triangles_in_order(mesh, bvh.prim_order.iter().copied()),

@@ -46,11 +46,20 @@ pub struct CwbvhNode {
     /// Per slot: 0 for empty; an inner child `0b001_11000 | slot`; a leaf of n triangles
     /// `(2^n - 1) << 5 | offset` (offset from `triangle_base`, below 24).
     pub meta: [u8; 8],
+    /// Per slot: the child box's low x plane in grid steps from `origin[0]`, rounded down
+    /// so that it lies at or below the true box under the kernel's f32 arithmetic (0 for
+    /// an empty slot).
     pub lo_x: [u8; 8],
+    /// Per slot: the low y plane, as `lo_x`.
     pub lo_y: [u8; 8],
+    /// Per slot: the low z plane, as `lo_x`.
     pub lo_z: [u8; 8],
+    /// Per slot: the child box's high x plane in grid steps from `origin[0]`, rounded up
+    /// so that it lies at or above the true box (0 for an empty slot).
     pub hi_x: [u8; 8],
+    /// Per slot: the high y plane, as `hi_x`.
     pub hi_y: [u8; 8],
+    /// Per slot: the high z plane, as `hi_x`.
     pub hi_z: [u8; 8],
 }
 

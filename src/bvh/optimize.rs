@@ -46,11 +46,13 @@ const NONE: u32 = u32::MAX;
 pub struct OptimizeReport {
     /// Rounds run (the last may have gained less than [`MIN_ROUND_GAIN`]).
     pub rounds: u32,
-    /// Moves tried, and those kept (that lowered the cost).
+    /// Moves tried.
     pub attempts: u64,
+    /// Moves kept: those that lowered the cost (the others were undone).
     pub moves: u64,
-    /// SAH cost ([`super::BvhStats::sah_cost`]) before and after.
+    /// SAH cost ([`super::BvhStats::sah_cost`]) of the tree as it came in.
     pub cost_before: f64,
+    /// SAH cost of the optimized tree; never above `cost_before`.
     pub cost_after: f64,
 }
 

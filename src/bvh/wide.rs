@@ -19,18 +19,28 @@ macro_rules! wide_node {
     ($name:ident, $n:literal) => {
         /// A wide node: the children's boxes plane by plane, then their references. A child
         /// with `count` 0 is an inner node (`child` indexes the node array), with `count > 0`
-        /// a leaf of `count` triangles from `child`, with [`EMPTY_SLOT`] unused. Mirrored
-        /// in cl/cltrace.h.
+        /// a leaf of `count` triangles from `child`, with `EMPTY_SLOT` (`u32::MAX`) unused.
+        /// Mirrored in cl/cltrace.h.
         #[repr(C)]
         #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
         pub struct $name {
+            /// Per slot: the low x plane of the child's box (0 in an unused slot).
             pub min_x: [f32; $n],
+            /// Per slot: the high x plane of the child's box.
             pub max_x: [f32; $n],
+            /// Per slot: the low y plane of the child's box.
             pub min_y: [f32; $n],
+            /// Per slot: the high y plane of the child's box.
             pub max_y: [f32; $n],
+            /// Per slot: the low z plane of the child's box.
             pub min_z: [f32; $n],
+            /// Per slot: the high z plane of the child's box.
             pub max_z: [f32; $n],
+            /// Per slot: an inner child's index in the node array, or a leaf's first
+            /// triangle in the leaf-order triangle list ([`super::Bin32Bvh::triangles`]).
             pub child: [u32; $n],
+            /// Per slot: 0 for an inner child, the triangle count (at least 1) for a leaf,
+            /// `EMPTY_SLOT` (`u32::MAX`) for an unused slot, which the kernel skips.
             pub count: [u32; $n],
         }
 

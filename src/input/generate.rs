@@ -32,6 +32,7 @@ pub enum Generator {
     },
     /// A unit icosphere.
     Sphere {
+        /// Subdivisions of the icosahedron (0 to 10): 20 * 4^n triangles; default 2.
         #[serde(default = "default_subdivisions")]
         subdivisions: u32,
     },
@@ -39,25 +40,34 @@ pub enum Generator {
     Cube {},
     /// `count` concentric cubes, each turned a little against the last.
     NestedBoxes {
+        /// Number of cubes (1 to 1000000), the k-th of half-size k / count; default 8.
         #[serde(default = "default_boxes")]
         count: u32,
     },
     /// `triangles` random triangles of random size in the unit cube.
     Soup {
+        /// Number of triangles (1 to 100 million); required.
         triangles: u32,
+        /// Seed of the random placement; each seed gives its own soup, always the same one
+        /// (default 0).
         #[serde(default)]
         seed: u64,
     },
     /// A noise-displaced height field of `resolution` x `resolution` cells.
     Landscape {
+        /// Cells along each side of [-1, 1]^2 in x and z (1 to 7071: two triangles a cell,
+        /// at most 100 million); required.
         resolution: u32,
+        /// Seed of the noise: each seed its own mesh, always the same one (default 0).
         #[serde(default)]
         seed: u64,
     },
     /// The landscape tilted up by 60 degrees about x, so that a camera on the +z axis (the
     /// auto framing) looks down onto it: the scaling benchmark's mesh.
     Hillside {
+        /// Cells along each side, as for [`Generator::Landscape`] (1 to 7071); required.
         resolution: u32,
+        /// Seed of the noise: each seed its own mesh, always the same one (default 0).
         #[serde(default)]
         seed: u64,
     },

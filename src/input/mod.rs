@@ -17,7 +17,9 @@ use crate::mesh::Mesh;
 /// Mesh file formats, told apart by extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MeshFormat {
+    /// Wavefront OBJ (`.obj`), with materials from its MTL libraries.
     Obj,
+    /// Stanford PLY (`.ply`): ASCII or binary, geometry only.
     Ply,
 }
 
@@ -49,6 +51,7 @@ pub fn load_mesh(path: &Path) -> Result<Mesh> {
 
 /// A mesh file's triangles and materials.
 pub struct MeshFile {
+    /// The triangles in file order, checked by [`Mesh::check`].
     pub mesh: Mesh,
     /// An OBJ's materials from its MTL files (`Kd`, `Ke`); grey for PLY.
     pub materials: Materials,

@@ -36,11 +36,15 @@ pub(crate) const DEFAULT_SCENE: &str = include_str!("../../scenes/default.toml")
 /// Where the mesh comes from.
 #[derive(Clone, Debug, PartialEq)]
 pub enum MeshSource {
+    /// An OBJ or PLY file, plain or gzip-compressed; a path from a scene file is already
+    /// joined to that file's folder.
     File(PathBuf),
+    /// A built-in generator with its parameters (a scene file's checked as it is parsed).
     Generator(Generator),
 }
 
 impl MeshSource {
+    /// The mesh alone: the file read, or the generator run.
     pub fn load(&self) -> Result<Mesh> {
         match self {
             MeshSource::File(path) => load_mesh(path),
@@ -81,9 +85,12 @@ impl MeshSource {
 #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RenderSettings {
+    /// Which tracer renders: `cpu-brute`, `cpu-bvh`, `cl-brute` or `cl-bvh` (the default).
     pub method: Option<Method>,
     /// The BVH node layout of `cl-bvh`.
     pub layout: Option<Layout>,
+    /// What a pixel shows: `normal`, `depth`, `lambert` (the default), `ao`, `shadow` or
+    /// `path`.
     pub shade: Option<Shade>,
     /// Samples per pixel of the progressive modes (ao, shadow, path).
     pub spp: Option<u32>,
@@ -118,7 +125,10 @@ impl RenderSettings {
 /// A parsed scene: the mesh to load and the settings the scene file gave.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneDescription {
+    /// Where the mesh comes from; not loaded yet.
     pub mesh: MeshSource,
+    /// The `[camera]` table, already checked as far as it can be without the mesh; the
+    /// command line's settings override it.
     pub camera: CameraSettings,
     pub(crate) render: RenderSettings,
 }
