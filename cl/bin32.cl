@@ -19,14 +19,9 @@ FORCE_INLINE float hit_box(const __global Bin32Node* node, float3 org, float3 in
  * The stack holds STACK_SIZE entries, the tree's depth, which a traversal never needs
  * more than; should it anyway, STATUS_STACK_OVERFLOW is set and the ray reported a miss. */
 FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, bool incoherent, float* t_hit) {
-    WatertightRay ray = watertight_ray(org, dir);
-    float3 inv = safe_inverse(dir);
-    float t = t_max;
-    uint best = MISS;
+    TRACE_START
     uint stack_node[STACK_SIZE];
     float stack_entry[STACK_SIZE];
-    uint sp = 0;
-    uint node = 0;
     bool live = hit_box(&nodes[0], org, inv, t) >= 0.0f;
     while (live) {
         const __global Bin32Node* n = &nodes[node];

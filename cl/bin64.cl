@@ -34,13 +34,8 @@
  * popped nodes by a stored entry distance (docs/performance.md, "Kernel changes,
  * measured"). */
 FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, bool incoherent, float* t_hit) {
-    WatertightRay ray = watertight_ray(org, dir);
-    float3 inv = safe_inverse(dir);
-    float t = t_max;
-    uint best = MISS;
+    TRACE_START
     uint stack_node[STACK_SIZE];
-    uint sp = 0;
-    uint node = 0;
     for (;;) {
         const __global float4* n = (const __global float4*)&nodes[node];
         float4 lxy = n[0], rxy = n[1], z = n[2];

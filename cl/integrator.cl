@@ -48,18 +48,28 @@ FORCE_INLINE void add_sample(__global float4* accum, __global uint* rays, uint a
     rays[i] += ray_count;
 }
 
+/* What every sample kernel starts with: the work-item's pixel (leaving at once outside the
+ * band) and its stream of random numbers. */
+#define SAMPLE_PIXEL                                                     \
+    uint x = get_global_id(0), y = get_global_id(1);                     \
+    if (x >= width || y < row0 || y >= row_end) return;                  \
+    uint key = sampler_key(seed, y * width + x, sample);
+
+/* SAMPLE_PIXEL, then the closest hit of the pixel's jittered camera ray: where the ambient
+ * occlusion and shadow samples start from. */
+#define SAMPLE_CAMERA_HIT                                                \
+    SAMPLE_PIXEL                                                         \
+    float3 dir = jittered_ray(p0, du, dv, x, y, key);                    \
+    float t;                                                             \
+    uint hit = trace(SCENE, eye.xyz, dir, INFINITY, false, false, &t);
+
 FORCE_INLINE bool occluded(SCENE_PARAMS, float3 org, float3 dir, float t_max) {
     float t;
     return trace(SCENE, org, dir, t_max, true, true, &t) != MISS;
 }
 
 __kernel void sample_ao(SAMPLE_PARAMS) {
-    uint x = get_global_id(0), y = get_global_id(1);
-    if (x >= width || y < row0 || y >= row_end) return;
-    uint key = sampler_key(seed, y * width + x, sample);
-    float3 dir = jittered_ray(p0, du, dv, x, y, key);
-    float t;
-    uint hit = trace(SCENE, eye.xyz, dir, INFINITY, false, false, &t);
+    SAMPLE_CAMERA_HIT
     float3 radiance = (float3)(0.0f);
     uint count = 1;
     if (hit != MISS) {
@@ -77,12 +87,7 @@ __kernel void sample_ao(SAMPLE_PARAMS) {
 }
 
 __kernel void sample_shadow(SAMPLE_PARAMS) {
-    uint x = get_global_id(0), y = get_global_id(1);
-    if (x >= width || y < row0 || y >= row_end) return;
-    uint key = sampler_key(seed, y * width + x, sample);
-    float3 dir = jittered_ray(p0, du, dv, x, y, key);
-    float t;
-    uint hit = trace(SCENE, eye.xyz, dir, INFINITY, false, false, &t);
+    SAMPLE_CAMERA_HIT
     float3 radiance = (float3)(0.0f);
     uint count = 1;
     if (hit != MISS) {
@@ -114,9 +119,7 @@ FORCE_INLINE uint pick_emitter(__global const float* cdf, uint count, float u) {
 }
 
 __kernel void sample_path(SAMPLE_PARAMS) {
-    uint x = get_global_id(0), y = get_global_id(1);
-    if (x >= width || y < row0 || y >= row_end) return;
-    uint key = sampler_key(seed, y * width + x, sample);
+    SAMPLE_PIXEL
     float3 org = eye.xyz;
     float3 dir = jittered_ray(p0, du, dv, x, y, key);
     float3 radiance = (float3)(0.0f), throughput = (float3)(1.0f);

@@ -23,6 +23,16 @@
 #error "a BVH program needs STACK_SIZE (src/device/program.rs passes it)"
 #endif
 
+/* What the binary and wide traversals start with: the ray's constants for the triangle and
+ * box tests, no hit before t_max yet, and an empty stack below the root. */
+#define TRACE_START                                                      \
+    WatertightRay ray = watertight_ray(org, dir);                        \
+    float3 inv = safe_inverse(dir);                                      \
+    float t = t_max;                                                     \
+    uint best = MISS;                                                    \
+    uint sp = 0;                                                         \
+    uint node = 0;
+
 /* Keeps a triangle test's result h (negative: no hit) for triangle `index` as the closest
  * hit so far (t, best); with any_hit, the first hit ends the traversal. */
 #define KEEP_HIT(h, index)                                               \

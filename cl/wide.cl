@@ -33,15 +33,10 @@ typedef char wide_lanes_are_slots[vec_step(WIDE_F) == WIDE_WIDTH ? 1 : -1];
  * operation per plane; leaf children are tested at once, the nearest inner one visited
  * next. Same contract as every trace (traverse.cl). */
 FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, bool incoherent, float* t_hit) {
-    WatertightRay ray = watertight_ray(org, dir);
-    float3 inv = safe_inverse(dir);
+    TRACE_START
     float3 inv_near = near_inverse(inv);
-    float t = t_max;
-    uint best = MISS;
     uint stack_node[STACK_SIZE];
     float stack_entry[STACK_SIZE];
-    uint sp = 0;
-    uint node = 0;
     for (;;) {
         const __global WIDE_NODE* n = &nodes[node];
         /* The near and far planes of each slab, picked by the ray's direction as in box_entry. */
