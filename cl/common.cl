@@ -41,5 +41,5 @@ typedef struct {
 /* The three floats from p, as one vector. */
 FORCE_INLINE float3 load3(const __global float* p) { return (float3)(p[0], p[1], p[2]); }
 
-/* |d|, summed in the host's order (src/render/mod.rs scales distances by it). */
+/* |d|, summed in the host's order (src/render/cpu.rs scales distances by it). */
 FORCE_INLINE float length3(float3 d) { return sqrt(d.x * d.x + d.y * d.y + d.z * d.z); }

@@ -1,5 +1,6 @@
-//! The pinhole camera: settings, the "auto" framing of `BENCHMARK.md`, validation, and the
-//! exact f32 arithmetic that turns a pixel into a ray on the host and in every kernel.
+//! The pinhole camera: settings, the "auto" framing of the benchmark protocol
+//! (`../shared/BENCHMARK.md`, outside the repository), validation, and the exact f32
+//! arithmetic that turns a pixel into a ray on the host and in every kernel.
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
@@ -12,8 +13,9 @@ use crate::geometry::{Aabb, Ray};
 pub const MAX_RESOLUTION: u32 = 16384;
 /// Field of view of the auto framing, degrees.
 pub const AUTO_FOV: f32 = 45.0;
-/// Resolution when neither the scene nor the flags give one.
+/// Width in pixels when neither the scene nor the flags give one.
 pub const DEFAULT_WIDTH: u32 = 1280;
+/// Height in pixels when neither the scene nor the flags give one.
 pub const DEFAULT_HEIGHT: u32 = 720;
 
 /// Camera settings; `None` means "not said here" (a later layer or the auto framing decides).
@@ -192,7 +194,7 @@ fn check_fov(fov: f32) -> Result<()> {
 /// The camera as kernels see it: pixel `(x, y)`'s ray leaves `eye` in direction
 /// `p0 + (x + 0.5) * du + (y + 0.5) * dv`, unnormalised. `p0` points at the image plane's
 /// top-left corner at distance 1; `du` steps one pixel right, `dv` one pixel down.
-/// Mirrored by `camera_ray` in `cl/cltrace.h`, operation for operation.
+/// Mirrored by `camera_ray` in `cl/camera.cl`, operation for operation.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Pinhole {

@@ -100,7 +100,7 @@ pub struct WatertightRay {
 }
 
 impl WatertightRay {
-    /// The constants for `ray`, as `watertight_ray` in `cl/cltrace.h` computes them: the
+    /// The constants for `ray`, as `watertight_ray` in `cl/intersect.cl` computes them: the
     /// axis along which `dir` is largest in magnitude becomes z (the other two swapped when
     /// `dir` points down it, keeping the winding), and the shear that maps `dir` onto it.
     pub fn new(ray: &Ray) -> Self {
@@ -171,7 +171,7 @@ impl WatertightRay {
         inside.then(|| t / det)
     }
 
-    /// [`WatertightRay::intersect`] on a stored triangle.
+    /// `WatertightRay::intersect` on a stored triangle.
     pub fn intersect_stored(&self, tri: &Triangle, t_max: f32) -> Option<f32> {
         self.intersect(tri.v0, tri.v1, tri.v2, t_max)
     }

@@ -1,3 +1,4 @@
+#![deny(missing_docs)]
 //! cltrace: a BVH ray tracer for any OpenCL device.
 //!
 //! The modules, bottom layer first; each uses only those above it in this list
@@ -19,7 +20,7 @@
 //! - [`device`]: the OpenCL host side, the only module that speaks OpenCL: devices,
 //!   programs assembled from `cl/`, pitched images, the tracer.
 //! - [`renderer`]: the four methods behind one face.
-//! - [`bench`], [`tune`]: the cross-device benchmark table; the fastest layout and
+//! - [`bench`](mod@bench), [`tune`]: the cross-device benchmark table; the fastest layout and
 //!   work-group per device, cached.
 //! - [`commands`]: the subcommands the `cltrace` binary runs (its flags live in the
 //!   binary, `src/flags/`).

@@ -8,7 +8,7 @@ use crate::intersect::Triangle;
 /// The albedo of triangles without a material: a mid grey.
 pub(crate) const DEFAULT_ALBEDO: [f32; 3] = [0.7, 0.7, 0.7];
 
-/// A diffuse (Lambertian) material, as the kernels read it (`Material` in cl/cltrace.h).
+/// A diffuse (Lambertian) material, as the kernels read it (`Material` in cl/common.cl).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Material {

@@ -14,7 +14,7 @@ pub(crate) const MAX_COORDINATE: f32 = 1e12;
 
 /// An indexed triangle mesh. Loaders and generators guarantee (through [`Mesh::check`])
 /// that it has at least one triangle, that every index is in range and that every
-/// vertex a triangle uses is finite and within [`MAX_COORDINATE`].
+/// vertex a triangle uses is finite and within `MAX_COORDINATE` (1e12 in magnitude).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
     /// The vertex positions in world space, indexed by [`Mesh::triangles`]. Vertices no
@@ -72,7 +72,7 @@ impl Mesh {
     }
 
     /// Rejects what no renderer can use: no triangles, an index past the vertex list, a
-    /// vertex that is NaN, infinite or beyond [`MAX_COORDINATE`], more triangles than a
+    /// vertex that is NaN, infinite or beyond `MAX_COORDINATE` (1e12), more triangles than a
     /// `u32` index can name.
     pub fn check(&self, path: &Path) -> Result<()> {
         if self.triangles.is_empty() {
@@ -110,7 +110,7 @@ impl Mesh {
 }
 
 /// What is wrong with a vertex no renderer can use: a NaN or infinite coordinate, or one
-/// beyond [`MAX_COORDINATE`]; `None` for a good vertex. The text completes "a vertex with ...".
+/// beyond `MAX_COORDINATE`; `None` for a good vertex. The text completes "a vertex with ...".
 pub(crate) fn coordinate_problem(p: Vec3) -> Option<String> {
     let xyz = p.to_array();
     if p.is_nan() {

@@ -1,7 +1,7 @@
 //! The four methods behind one face: [`Renderer::prepare`] does the per-scene work (BVH
-//! build and layout, kernel compilation, upload), then [`Renderer::render`] traces primary
+//! build and layout, kernel compilation, upload), then `Renderer::render` traces primary
 //! frames, [`Renderer::render_samples`] accumulates the progressive shade modes and
-//! [`Renderer::trace_rays`] traces arbitrary rays.
+//! `Renderer::trace_rays` traces arbitrary rays.
 
 use std::sync::atomic::AtomicBool;
 

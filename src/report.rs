@@ -16,6 +16,7 @@ pub enum Verbosity {
 }
 
 impl Verbosity {
+    /// The level `--quiet` and `--verbose` ask for; `--quiet` wins when both are given.
     pub fn from_flags(quiet: bool, verbose: bool) -> Self {
         if quiet {
             Verbosity::Quiet

@@ -34,10 +34,14 @@ pub const SHAPES: [[usize; 2]; 8] = [
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Tuning {
+    /// The layout cl-bvh renders in on this device.
     pub layout: Layout,
+    /// The work-group shape of its kernels: pixels across, down (one of [`SHAPES`]).
     pub work_group: [usize; 2],
-    /// The speeds it was chosen for, in millions of rays per second.
+    /// Its primary-ray speed on the tuning scene, millions of rays per second (the best is
+    /// chosen by the geometric mean of this and `diffuse_mrays`).
     pub primary_mrays: f64,
+    /// Its speed on the benchmark protocol's diffuse rays, millions of rays per second.
     pub diffuse_mrays: f64,
     /// The scene it was measured on.
     pub(crate) scene: String,

@@ -44,8 +44,10 @@ pub enum RayKind {
 }
 
 impl RayKind {
+    /// Every kind, in the order the tables list them.
     pub const ALL: [RayKind; 2] = [RayKind::Primary, RayKind::Diffuse];
 
+    /// The kind's name: on the command line (`--rays`) and in the tables' `ray_kind` column.
     pub fn name(self) -> &'static str {
         match self {
             RayKind::Primary => "primary",
@@ -103,8 +105,9 @@ pub(crate) fn tile_order(width: u32, height: u32, tile: u32) -> impl Iterator<It
 /// method then traces the same rays). Directions come from the counter-based generator with
 /// seed 0, keyed by pixel, so the rays are the same on every machine. They come in the order
 /// of [`tile_order`], as the render kernels' 2D work-groups trace their bounces: rays from
-/// neighbouring pixels start close together and share the nodes around their origins (on
-/// the H100, 16 x 16 tiles traced 4-8% faster than scanline order; docs/performance.md).
+/// neighbouring pixels start close together and share the nodes around their origins
+/// (measured against scanline order: docs/performance.md, "Order of the diffuse batch"
+/// under "Diffuse rays").
 pub(crate) fn diffuse_rays(mesh: &Mesh, camera: &Camera) -> Vec<Ray> {
     use crate::intersect::ClosestHit;
     use crate::render::integrator::facing_normal;
@@ -141,18 +144,26 @@ pub struct BenchRequest {
     pub generated: Vec<Generator>,
     /// Folders whose every mesh is added.
     pub scene_folders: Vec<PathBuf>,
+    /// Methods to measure, each on every device it runs on.
     pub methods: Vec<Method>,
     /// The node layouts `cl-bvh` is measured in.
     pub layouts: Vec<Layout>,
     /// Device selectors; `None` for every device.
     pub devices: Option<Vec<String>>,
+    /// Kinds of rays to trace at each resolution.
     pub ray_kinds: Vec<RayKind>,
+    /// Image sizes (width, height in pixels), each framed automatically.
     pub resolutions: Vec<(u32, u32)>,
+    /// Untimed frames before the timed ones.
     pub warmup: u32,
+    /// Timed frames (at least 1): the median and minimum are reported.
     pub repetitions: u32,
     /// Brute-force runs estimated to take longer than this (seconds) are skipped.
     pub brute_budget_s: f64,
+    /// How every BVH is built.
     pub build: BuildOptions,
+    /// How much goes to stderr: rows as they come with `--verbose`, the progress bar unless
+    /// `--quiet`.
     pub verbosity: Verbosity,
 }
 

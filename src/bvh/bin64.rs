@@ -8,7 +8,7 @@ use super::{Bin32Bvh, Bin32Node};
 
 /// A 64-byte node: both children's boxes, then their references. A child with `count` 0 is
 /// an inner node (`child` indexes the node array); with `count > 0` it is a leaf of `count`
-/// triangles from `child`. Mirrors `Bin64Node` in cl/cltrace.h.
+/// triangles from `child`. Mirrors `Bin64Node` in cl/nodes.cl; cl/bin64.cl traverses it.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Bin64Node {

@@ -29,7 +29,7 @@ const INNER_META: u8 = 0b001_11000;
 
 /// An 80-byte compressed 8-wide node. Child `k`'s box on axis `a` is
 /// `origin[a] + lo_a[k] * 2^(exponent[a] - 127)` to the same with `hi_a[k]`.
-/// Mirrors `CwbvhNode` in cl/cltrace.h.
+/// Mirrors `CwbvhNode` in cl/nodes.cl; cl/cwbvh.cl traverses it.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct CwbvhNode {
@@ -89,7 +89,7 @@ impl CwbvhNode {
         )
     }
 
-    /// The kernel's box test of slot `k` (cl/cltrace.h, `LAYOUT == 80`), operation for
+    /// The kernel's box test of slot `k` (the traversal loop of cl/cwbvh.cl), operation for
     /// operation: plane q of an axis lies at `q * a + b` along the ray, one fused
     /// multiply-add, with the near planes moved nearer and the far ones farther by a bound
     /// on that form's rounding error. True when the ray may meet the box in `[0, t_max]`.

@@ -27,6 +27,7 @@ pub enum Layout {
 }
 
 impl Layout {
+    /// Every layout, the default first.
     pub const ALL: [Layout; 5] = [
         Layout::Bin32,
         Layout::Bin64,
@@ -35,6 +36,8 @@ impl Layout {
         Layout::Cwbvh,
     ];
 
+    /// The layout's name: on the command line (`--layout`), in the bench's method column
+    /// (`cl-bvh:NAME`) and as its kernel file (`cl/NAME.cl`).
     pub fn name(self) -> &'static str {
         match self {
             Layout::Bin32 => "bin32",

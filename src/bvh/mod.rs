@@ -72,8 +72,11 @@ pub enum Builder {
 }
 
 impl Builder {
+    /// Every builder, the default first.
     pub const ALL: [Builder; 2] = [Builder::Binned, Builder::Sweep];
 
+    /// The builder's name on the command line (`--builder`), which [`str::parse`] reads
+    /// back.
     pub fn name(self) -> &'static str {
         match self {
             Builder::Binned => "binned",
@@ -114,6 +117,7 @@ impl std::str::FromStr for Builder {
 /// How to build.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BuildOptions {
+    /// Which builder makes the tree.
     pub builder: Builder,
     /// Bins per axis for the binned builder (2 to 64).
     pub bins: u32,
@@ -143,6 +147,7 @@ impl Default for BuildOptions {
 }
 
 impl BuildOptions {
+    /// Checks every option is in its range, naming the flag that is not.
     pub fn check(&self) -> crate::Result<()> {
         if !(2..=build::MAX_BINS as u32).contains(&self.bins) {
             return Err(crate::Error::Invalid(format!(
@@ -177,6 +182,7 @@ impl BuildOptions {
 /// A built BVH: nodes in depth-first order (root first) and the leaf order of triangles.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Bvh {
+    /// The nodes, root first; a leaf's `left_or_first` indexes [`Bvh::prim_order`].
     pub nodes: Vec<Bin32Node>,
     /// `prim_order[i]` is the mesh triangle at position `i` of the leaves' ranges.
     pub prim_order: Vec<u32>,
@@ -196,6 +202,7 @@ impl Bvh {
         bvh
     }
 
+    /// The tree's summary numbers (SAH cost, depth, leaf sizes).
     pub fn stats(&self) -> BvhStats {
         BvhStats::of(self)
     }

@@ -15,7 +15,7 @@
 //!
 //! Each round ranks the inner nodes by inefficiency, `M = A(N)^3 / (min(A(L), A(R)) ·
 //! (A(L) + A(R)))` (the paper's product of its "area", "min" and "sum" measures), and tries
-//! to move the worst [`BATCH_SHARE`] of them, one by one, worst first. A node whose move
+//! to move the worst `BATCH_SHARE` (10%) of them, one by one, worst first. A node whose move
 //! was undone is not tried again in the same pass (unless a kept move reuses it), so that
 //! each round tries fresh nodes: ten rounds make a pass over the inner nodes, and then the
 //! next pass begins. Rounds stop when the budget is spent or a round lowers the cost by

@@ -20,7 +20,7 @@ macro_rules! wide_node {
         /// A wide node: the children's boxes plane by plane, then their references. A child
         /// with `count` 0 is an inner node (`child` indexes the node array), with `count > 0`
         /// a leaf of `count` triangles from `child`, with `EMPTY_SLOT` (`u32::MAX`) unused.
-        /// Mirrored in cl/cltrace.h.
+        /// Mirrored by the struct of its name in cl/nodes.cl; cl/wide.cl traverses it.
         #[repr(C)]
         #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
         pub struct $name {

@@ -14,6 +14,7 @@ use crate::report::{Timings, format_ms};
 pub struct BvhRequest {
     /// A scene file or a mesh; `None` for the built-in default scene.
     pub scene: Option<PathBuf>,
+    /// How to build the BVH.
     pub build: BuildOptions,
     /// Builds (and optimizations) to run; the fastest is reported.
     pub repeat: u32,

@@ -35,11 +35,13 @@ pub const MAX_SPP: u32 = 65536;
 pub const DEFAULT_SEED: u32 = 0;
 /// Ambient occlusion rays per sample.
 pub const DEFAULT_AO_SAMPLES: u32 = 16;
+/// The most ambient occlusion rays per sample accepted (`--ao-samples`).
 pub const MAX_AO_SAMPLES: u32 = 1024;
 /// Ambient occlusion rays reach this share of the scene's bounding radius by default.
 pub const AO_DISTANCE_SHARE: f32 = 0.25;
 /// Bounces of the path tracer.
 pub const DEFAULT_MAX_BOUNCES: u32 = 8;
+/// The most bounces accepted (`--max-bounces`; 0 is direct light only).
 pub const MAX_BOUNCES: u32 = 1024;
 /// The light of the shadow mode: a sun from above, left and in front (+z, where the auto
 /// framing puts the eye).
@@ -58,6 +60,7 @@ pub struct RenderRequest {
     pub camera: CameraSettings,
     /// Render settings from flags; they override the scene file's.
     pub render: RenderSettings,
+    /// The image to write; its extension picks the format.
     pub output: PathBuf,
     /// Where to write the raw hit records, if anywhere.
     pub hits: Option<PathBuf>,
@@ -72,6 +75,7 @@ pub struct RenderRequest {
     /// The tuning cache to read the device's layout and work-group from (`cltrace tune`
     /// writes it); `None` reads none.
     pub tune_cache: Option<PathBuf>,
+    /// How much goes to stderr: the summary and stage timings, details with `--verbose`.
     pub verbosity: Verbosity,
 }
 

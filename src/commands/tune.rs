@@ -1,5 +1,5 @@
 //! `cltrace tune`: measures each OpenCL device's layouts and work-group shapes
-//! ([`crate::tune::tune_device`]), prints them as a Markdown table and keeps the best in the
+//! (`crate::tune::tune_device`), prints them as a Markdown table and keeps the best in the
 //! tuning cache.
 
 use std::path::PathBuf;
@@ -22,6 +22,7 @@ pub struct TuneRequest {
     /// The cache file the results go into (other devices' entries are kept); `None` when
     /// no location is known, which is an error.
     pub cache: Option<PathBuf>,
+    /// How much goes to stderr: which device is tuned, its best and where it was saved.
     pub verbosity: Verbosity,
 }
 

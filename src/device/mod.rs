@@ -48,9 +48,13 @@ pub(crate) const INSTALL_HINT: &str = "install an OpenCL driver, e.g. PoCL for t
 /// The kind of a device, as OpenCL reports it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DeviceKind {
+    /// `CL_DEVICE_TYPE_GPU`.
     Gpu,
+    /// `CL_DEVICE_TYPE_CPU`: the host's cores, through a driver such as PoCL.
     Cpu,
+    /// `CL_DEVICE_TYPE_ACCELERATOR`.
     Accelerator,
+    /// Any other type (custom devices).
     Other,
 }
 
@@ -71,11 +75,15 @@ pub struct DeviceInfo {
     pub(crate) platform_index: usize,
     pub(crate) device_index: usize,
     pub(crate) platform_name: String,
+    /// `CL_DEVICE_NAME`, trimmed.
     pub name: String,
     pub(crate) kind: DeviceKind,
     pub(crate) compute_units: u32,
+    /// `CL_DEVICE_GLOBAL_MEM_SIZE`, in bytes.
     pub global_memory: u64,
+    /// `CL_DEVICE_MAX_MEM_ALLOC_SIZE`: the largest single buffer, in bytes.
     pub max_allocation: u64,
+    /// `CL_DEVICE_MAX_WORK_GROUP_SIZE`: the most work-items in a work-group.
     pub max_work_group_size: usize,
     pub(crate) opencl_c_version: String,
     pub(crate) driver_version: String,
@@ -317,8 +325,10 @@ impl DeviceSelector {
 /// An opened device: its context and an in-order queue with profiling, so that kernel
 /// times come from the device's own clock.
 pub struct ClDevice {
+    /// The device this was opened from.
     pub info: DeviceInfo,
     pub(crate) context: ocl::Context,
+    /// The in-order, profiling queue every command of this device goes to.
     pub queue: ocl::Queue,
 }
 

@@ -48,8 +48,11 @@ const FILES: &[(&str, &str)] = &[
 /// A constant the kernels share with the host, as Rust holds it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Constant {
+    /// A `uint`.
     U32(u32),
+    /// An `int`.
     I32(i32),
+    /// A `float`, written exact to the bit.
     F32(f32),
 }
 

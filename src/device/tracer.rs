@@ -29,14 +29,20 @@ pub const STATUS_STACK_OVERFLOW: u32 = 1;
 /// the progressive shade modes of cl/integrator.cl.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kernel {
+    /// `trace_primary`: one primary ray per pixel of a band of rows, hit and colour.
     TracePrimary,
+    /// `trace_rays`: a list of arbitrary rays, closest or any hit (the diffuse rays).
     TraceRays,
+    /// `sample_ao`: one ambient occlusion sample per pixel of a band.
     SampleAo,
+    /// `sample_shadow`: one sample per pixel of a band under one light, with hard shadows.
     SampleShadow,
+    /// `sample_path`: one path-traced sample per pixel of a band.
     SamplePath,
 }
 
 impl Kernel {
+    /// Every kernel, the closest-hit ones first.
     pub const ALL: [Kernel; 5] = [
         Kernel::TracePrimary,
         Kernel::TraceRays,
@@ -197,6 +203,7 @@ pub struct DeviceTimes {
     pub(crate) kernel_ms: f64,
     /// Host wall time of the rectangular reads.
     pub(crate) read_back_ms: f64,
+    /// Kernel launches the render took: one per band of rows, one for a list of rays.
     pub launches: u32,
 }
 
@@ -459,7 +466,7 @@ impl<'d> ClTracer<'d> {
 
     /// Adds the samples `samples` of every pixel to `accumulation`, with the kernels of
     /// cl/integrator.cl (the program must have been compiled with sampling). Launches cover bands
-    /// of rows, each about [`LAUNCH_TARGET_MS`]; a whole sample of the image is taken before
+    /// of rows, each about `LAUNCH_TARGET_MS` (100 ms); a whole sample of the image is taken before
     /// the next one where the accumulation image fits on the device, so that stopping early
     /// (`stop` set, checked between launches) leaves every pixel with nearly the same number
     /// of samples. `on_sample` is called after each finished sample with the number of

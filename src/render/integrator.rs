@@ -1,6 +1,6 @@
 //! The progressive shade modes on the host: ambient occlusion, a light with hard shadows,
 //! and a diffuse path tracer with next-event estimation. Each sample of each pixel is a
-//! pure function of (seed, pixel, sample), mirrored by the kernels of cl/sample.cl, so the
+//! pure function of (seed, pixel, sample), mirrored by the kernels of cl/integrator.cl, so the
 //! host is the reference the devices are compared with.
 
 use std::f32::consts::PI;
@@ -62,21 +62,35 @@ impl std::str::FromStr for Light {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Lighting {
     /// The unoccluded share of `samples` cosine-weighted rays of length `distance`.
-    Ao { samples: u32, distance: f32 },
+    Ao {
+        /// Occlusion rays per sample.
+        samples: u32,
+        /// How far each ray looks for an occluder, in world units.
+        distance: f32,
+    },
     /// Albedo under one light, with hard shadows and a little ambient light.
-    Shadow { light: Light },
+    Shadow {
+        /// The one light.
+        light: Light,
+    },
     /// Diffuse path tracing: next-event estimation to emitting triangles where there are
     /// any, a sky otherwise, Russian roulette after a few bounces.
-    Path { max_bounces: u32 },
+    Path {
+        /// Diffuse bounces after the first hit, at most; 0 lights the first hit only.
+        max_bounces: u32,
+    },
 }
 
 /// Everything a sample needs besides the geometry.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SampleSettings {
+    /// How a sample finds its radiance.
     pub lighting: Lighting,
     /// How far secondary rays start off the surface, along its normal (1e-4 of the scene
     /// radius, as in the benchmark protocol).
     pub offset: f32,
+    /// The seed of the random numbers: with the pixel and the sample index it fixes every
+    /// number a sample draws.
     pub seed: u32,
 }
 
@@ -308,10 +322,12 @@ pub struct Accumulation {
     pub(crate) height: u32,
     /// Red, green, blue sums and the number of samples, per pixel, row-major.
     pub pixels: Vec<[f32; 4]>,
+    /// Rays traced for these sums (camera, occlusion and bounce rays).
     pub rays: u64,
 }
 
 impl Accumulation {
+    /// A `width` x `height` accumulation with no samples.
     pub fn new(width: u32, height: u32) -> Self {
         Accumulation {
             width,

@@ -26,6 +26,7 @@ pub enum Method {
 }
 
 impl Method {
+    /// Every method, host ones first.
     pub const ALL: [Method; 4] = [
         Method::CpuBrute,
         Method::CpuBvh,
@@ -33,6 +34,8 @@ impl Method {
         Method::ClBvh,
     ];
 
+    /// The method's name: on the command line (`--method`), in scene files and in the
+    /// bench's tables.
     pub fn name(self) -> &'static str {
         match self {
             Method::CpuBrute => "cpu-brute",
@@ -98,6 +101,7 @@ impl std::str::FromStr for Method {
 }
 
 impl Shade {
+    /// Every mode, the single-hit ones first.
     pub const ALL: [Shade; 6] = [
         Shade::Normal,
         Shade::Depth,
@@ -107,7 +111,8 @@ impl Shade {
         Shade::Path,
     ];
 
-    /// The number the primary-ray kernel uses (`SHADE_*` in cl/cltrace.h); the progressive
+    /// The number the primary-ray kernel uses (`SHADE_*`, written in front of every program
+    /// by src/device/program.rs and read by cl/shade.cl); the progressive
     /// modes shade their own samples and are given Lambert for the primary pass.
     pub fn code(self) -> i32 {
         match self {
@@ -117,6 +122,7 @@ impl Shade {
         }
     }
 
+    /// The mode's name: on the command line (`--shade`) and in scene files.
     pub fn name(self) -> &'static str {
         match self {
             Shade::Normal => "normal",
@@ -178,7 +184,10 @@ pub const MISS: u32 = u32::MAX;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Hit {
+    /// The triangle's index in file order, or [`MISS`].
     pub prim: u32,
+    /// Distance from the ray's origin (the eye, for primary rays) to the hit, in world
+    /// units whatever the direction's length; +inf for a miss.
     pub t: f32,
 }
 
@@ -188,6 +197,7 @@ impl Hit {
         t: f32::INFINITY,
     };
 
+    /// Whether the ray hit nothing.
     pub fn is_miss(&self) -> bool {
         self.prim == MISS
     }
@@ -197,9 +207,13 @@ impl Hit {
 /// row-major, `y` down.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
+    /// Width in pixels.
     pub width: u32,
+    /// Height in pixels.
     pub height: u32,
+    /// One closest hit per pixel.
     pub hits: Vec<Hit>,
+    /// One RGBA8 colour per pixel, red in the low byte.
     pub colors: Vec<u32>,
     /// Linear radiance per pixel, for the progressive shade modes (the colours are then its
     /// tone-mapped form).
@@ -218,6 +232,7 @@ impl Frame {
         }
     }
 
+    /// The hit of pixel (x, y); panics outside the frame.
     pub fn hit(&self, x: u32, y: u32) -> Hit {
         self.hits[(y * self.width + x) as usize]
     }

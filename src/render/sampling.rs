@@ -1,5 +1,5 @@
-//! Random numbers and the sampling of directions, pixels and lights, mirrored in
-//! cl/cltrace.h so that the host reference and the devices draw the same numbers.
+//! Random numbers and the sampling of directions and of points on triangles, mirrored in
+//! cl/sampling.cl so that the host reference and the devices draw the same numbers.
 //!
 //! The generator is counter-based: a number is a hash of (seed, pixel, sample, dimension),
 //! so any pixel's any sample can be drawn in any order, on any device, with no state.

@@ -1,4 +1,4 @@
-//! Shading on the host, mirroring `shade_hit` in cl/cltrace.h.
+//! Shading on the host, mirroring `shade_hit` in cl/shade.cl.
 
 use glam::Vec3;
 
@@ -17,6 +17,9 @@ pub struct ShadeParams {
 }
 
 impl ShadeParams {
+    /// The parameters of `shade` for `camera` looking at a scene within `bounds`: depth
+    /// maps the near and far points of the box's bounding sphere (distances from the eye,
+    /// near at least 0) to white and black.
     pub fn new(shade: Shade, camera: &Camera, bounds: &Aabb) -> Self {
         let radius = bounds.extent().length() * 0.5;
         let distance = (bounds.center() - camera.eye).length();
