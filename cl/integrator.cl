@@ -35,8 +35,7 @@ FORCE_INLINE float3 sky(float3 d) {
 
 /* Every sample kernel takes the same arguments; each mode reads the ones it needs. The
  * launch covers rows [global offset, row_end); the accumulation image's row 0 is row0. */
-#define SAMPLE_PARAMS SCENE_PARAMS, LIGHT_PARAMS, \
-    float4 eye, float4 p0, float4 du, float4 dv, uint width, uint row0, uint row_end, \
+#define SAMPLE_PARAMS SCENE_PARAMS, LIGHT_PARAMS, CAMERA_BAND_PARAMS, \
     float offset, uint seed, uint sample, \
     uint ao_samples, float ao_distance, float4 light, uint max_bounces, \
     __global float4* accum, __global uint* rays, uint accum_pitch

@@ -6,9 +6,7 @@
 
 /* One primary ray per pixel of the band [row0, row_end), written to pitched images whose
  * row 0 is image row row0. */
-__kernel void trace_primary(SCENE_PARAMS,
-                            float4 eye, float4 p0, float4 du, float4 dv,
-                            uint width, uint row0, uint row_end,
+__kernel void trace_primary(SCENE_PARAMS, CAMERA_BAND_PARAMS,
                             int shade, float near, float far,
                             __global Hit* hits, uint hit_pitch,
                             __global uint* colors, uint color_pitch) {

@@ -81,11 +81,13 @@ impl Kernel {
             BruteSceneParams::NAMES
         };
         let own = match self {
-            Kernel::TracePrimary => TracePrimaryParams::NAMES,
-            Kernel::TraceRays => TraceRaysParams::NAMES,
-            Kernel::SampleAo | Kernel::SampleShadow | Kernel::SamplePath => SampleParams::NAMES,
+            Kernel::TracePrimary => [BandParams::NAMES, PrimaryParams::NAMES].concat(),
+            Kernel::TraceRays => TraceRaysParams::NAMES.to_vec(),
+            Kernel::SampleAo | Kernel::SampleShadow | Kernel::SamplePath => {
+                [LightParams::NAMES, BandParams::NAMES, SampleParams::NAMES].concat()
+            }
         };
-        [scene, own].concat()
+        [scene, &own].concat()
     }
 }
 
@@ -93,19 +95,25 @@ impl Kernel {
 /// whose fields are named and ordered as the kernel's parameters are: `bind` adds them to a
 /// kernel builder under their names, `set` sets them by name on a built kernel.
 macro_rules! kernel_params {
+    ($(#[$doc:meta])* struct $name:ident { $($field:ident: $ty:ty,)* }) => {
+        kernel_params! { @define $(#[$doc])* struct $name[] { $($field: $ty,)* } }
+    };
     ($(#[$doc:meta])* struct $name:ident<$a:lifetime> { $($field:ident: $ty:ty,)* }) => {
+        kernel_params! { @define $(#[$doc])* struct $name[$a] { $($field: $ty,)* } }
+    };
+    (@define $(#[$doc:meta])* struct $name:ident[$($a:lifetime)?] { $($field:ident: $ty:ty,)* }) => {
         $(#[$doc])*
         #[derive(Clone, Copy)]
-        struct $name<$a> {
+        struct $name$(<$a>)? {
             $($field: $ty,)*
         }
 
-        impl<$a> $name<$a> {
+        impl$(<$a>)? $name$(<$a>)? {
             const NAMES: &'static [&'static str] = &[$(stringify!($field)),*];
 
             fn bind<'b>(&self, builder: &mut ocl::builders::KernelBuilder<'b>)
-            where
-                $a: 'b,
+            $(where
+                $a: 'b,)?
             {
                 $(builder.arg_named(stringify!($field), self.$field);)*
             }
@@ -138,8 +146,11 @@ kernel_params! {
 }
 
 kernel_params! {
-    /// `trace_primary` (cl/trace.cl) after the scene's parameters.
-    struct TracePrimaryParams<'a> {
+    /// `CAMERA_BAND_PARAMS` (cl/camera.cl), which every image kernel takes: the camera's
+    /// eye and pixel grid, the image width, and the band of rows `[row0, row_end)` one
+    /// launch covers (its images' row 0 is image row `row0`).
+    #[derive(Default)]
+    struct BandParams {
         eye: Float4,
         p0: Float4,
         du: Float4,
@@ -147,6 +158,29 @@ kernel_params! {
         width: u32,
         row0: u32,
         row_end: u32,
+    }
+}
+
+impl BandParams {
+    /// The band parameters of `camera` for a `width`-pixel image, before any band is set.
+    fn new(camera: &Pinhole, width: u32) -> Self {
+        let f4 = |v: [f32; 4]| Float4::new(v[0], v[1], v[2], v[3]);
+        BandParams {
+            eye: f4(camera.eye),
+            p0: f4(camera.p0),
+            du: f4(camera.du),
+            dv: f4(camera.dv),
+            width,
+            row0: 0,
+            row_end: 0,
+        }
+    }
+}
+
+kernel_params! {
+    /// `trace_primary` (cl/trace.cl) after the scene's and the band's parameters.
+    #[derive(Default)]
+    struct PrimaryParams<'a> {
         shade: i32,
         near: f32,
         far: f32,
@@ -168,21 +202,21 @@ kernel_params! {
 }
 
 kernel_params! {
-    /// `SAMPLE_PARAMS` after the scene's, which every kernel of cl/integrator.cl takes:
-    /// `LIGHT_PARAMS`, the camera, the band, the sample and the shade mode's settings.
-    struct SampleParams<'a> {
+    /// `LIGHT_PARAMS` (cl/integrator.cl): the materials and the emitting triangles, with
+    /// the cumulative distribution of their areas.
+    struct LightParams<'a> {
         materials: &'a ocl::Buffer<Material>,
         emitters: &'a ocl::Buffer<u32>,
         emitter_cdf: &'a ocl::Buffer<f32>,
         emitter_count: u32,
         emitter_area: f32,
-        eye: Float4,
-        p0: Float4,
-        du: Float4,
-        dv: Float4,
-        width: u32,
-        row0: u32,
-        row_end: u32,
+    }
+}
+
+kernel_params! {
+    /// The rest of `SAMPLE_PARAMS` (cl/integrator.cl), after the scene's, the lights' and
+    /// the band's: the sample and the shade mode's settings, and the accumulation images.
+    struct SampleParams<'a> {
         offset: f32,
         seed: u32,
         sample: u32,
@@ -379,25 +413,10 @@ impl<'d> ClTracer<'d> {
         first_band_pixels: usize,
     ) -> Result<Self> {
         // Bound now, with the frame's values set by render().
-        let unset = TracePrimaryParams {
-            eye: Float4::zero(),
-            p0: Float4::zero(),
-            du: Float4::zero(),
-            dv: Float4::zero(),
-            width: 0,
-            row0: 0,
-            row_end: 0,
-            shade: 0,
-            near: 0.0,
-            far: 0.0,
-            hits: None,
-            hit_pitch: 0,
-            colors: None,
-            color_pitch: 0,
-        };
         let kernel = Kernel::TracePrimary;
         let mut builder = kernel_builder(device, program, kernel, &scene)?;
-        unset.bind(&mut builder);
+        BandParams::default().bind(&mut builder);
+        PrimaryParams::default().bind(&mut builder);
         let primary = builder
             .build()
             .map_err(|e| device.error(&format!("creating the {} kernel", kernel.name()), e))?;
@@ -518,21 +537,16 @@ impl<'d> ClTracer<'d> {
             }
             Lighting::Path { max_bounces } => (0, 0.0, Float4::zero(), max_bounces),
         };
-        let f4 = |v: [f32; 4]| Float4::new(v[0], v[1], v[2], v[3]);
-        // The band (row0, row_end) and the sample change from launch to launch.
-        let mut params = SampleParams {
+        let light_params = LightParams {
             materials: &lights.materials,
             emitters: &lights.emitters,
             emitter_cdf: &lights.cdf,
             emitter_count: lights.count,
             emitter_area: lights.area,
-            eye: f4(camera.eye),
-            p0: f4(camera.p0),
-            du: f4(camera.du),
-            dv: f4(camera.dv),
-            width,
-            row0: 0,
-            row_end: 0,
+        };
+        // The band (row0, row_end) and the sample change from launch to launch.
+        let mut band = BandParams::new(camera, width);
+        let mut params = SampleParams {
             offset: settings.offset,
             seed: settings.seed,
             sample: 0,
@@ -545,13 +559,15 @@ impl<'d> ClTracer<'d> {
             accum_pitch: pitch as u32,
         };
         let mut builder = kernel_builder(device, &self.program, kernel, &self.scene)?;
+        light_params.bind(&mut builder);
+        band.bind(&mut builder);
         params.bind(&mut builder);
         let kernel = builder
             .build()
             .map_err(|e| device.error(&format!("creating the {name} kernel"), e))?;
-        let set = |params: &SampleParams| {
-            params
-                .set(&kernel)
+        let set = |band: &BandParams, params: &SampleParams| {
+            band.set(&kernel)
+                .and_then(|()| params.set(&kernel))
                 .map_err(|e| device.error(&format!("setting the arguments of {name}"), e))
         };
 
@@ -574,7 +590,7 @@ impl<'d> ClTracer<'d> {
                 .enq()
                 .map_err(|e| device.error("clearing the ray counts", e))?;
             // The accumulation image's row 0 is the group's first row; bands run inside it.
-            params.row0 = group0 as u32;
+            band.row0 = group0 as u32;
             let mut stopped = false;
             let mut rays_per_sample = None;
             'samples: for (done, sample) in samples.clone().enumerate() {
@@ -582,8 +598,8 @@ impl<'d> ClTracer<'d> {
                 let mut y0 = group0;
                 while y0 < group0 + group_rows {
                     let rows = self.sample_bands.next_rows(w, group0 + group_rows - y0);
-                    params.row_end = (y0 + rows) as u32;
-                    set(&params)?;
+                    band.row_end = (y0 + rows) as u32;
+                    set(&band, &params)?;
                     let ms = launch_rows(device, &kernel, local, w, y0, rows)?;
                     times.kernel_ms += ms;
                     times.launches += 1;
@@ -652,16 +668,9 @@ impl<'d> ClTracer<'d> {
         let colors = PitchedBuffer::<u32>::new(device, w, band_capacity)?;
 
         let k = &self.primary;
-        let f4 = |v: [f32; 4]| Float4::new(v[0], v[1], v[2], v[3]);
         // The band (row0, row_end) changes from launch to launch.
-        let mut params = TracePrimaryParams {
-            eye: f4(camera.eye),
-            p0: f4(camera.p0),
-            du: f4(camera.du),
-            dv: f4(camera.dv),
-            width,
-            row0: 0,
-            row_end: 0,
+        let mut band = BandParams::new(camera, width);
+        let params = PrimaryParams {
             shade: shade.shade.code(),
             near: shade.near,
             far: shade.far,
@@ -680,9 +689,9 @@ impl<'d> ClTracer<'d> {
         while y0 < h {
             let rows = self.bands.next_rows(w, h - y0).min(band_capacity);
             // Work-items past the band (the global size is rounded up) return at once.
-            params.row0 = y0 as u32;
-            params.row_end = (y0 + rows) as u32;
-            params.set(k).map_err(|e| {
+            band.row0 = y0 as u32;
+            band.row_end = (y0 + rows) as u32;
+            band.set(k).and_then(|()| params.set(k)).map_err(|e| {
                 device.error(
                     &format!("setting the arguments of {}", Kernel::TracePrimary.name()),
                     e,

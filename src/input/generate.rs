@@ -205,20 +205,18 @@ impl Generator {
             )))
         };
         match *self {
+            Generator::Sphereflake { levels, .. } if levels > 5 => {
+                return bad("levels", "at most 5");
+            }
             Generator::Sphereflake {
                 levels,
                 subdivisions,
-                ground,
-            } => {
-                if levels > 5 {
-                    return bad("levels", "at most 5");
-                }
-                if subdivisions + levels > 9 {
-                    return bad("subdivisions + levels", "at most 9");
-                }
-                if ground > 4096 {
-                    return bad("ground", "at most 4096");
-                }
+                ..
+            } if subdivisions + levels > 9 => {
+                return bad("subdivisions + levels", "at most 9");
+            }
+            Generator::Sphereflake { ground, .. } if ground > 4096 => {
+                return bad("ground", "at most 4096");
             }
             Generator::Sphere { subdivisions } if subdivisions > 10 => {
                 return bad("subdivisions", "at most 10");
