@@ -940,6 +940,36 @@ fn obj_materials_come_from_the_mtl_file() {
     assert_eq!(corners(&load_mesh(&obj).unwrap()), corners(&file.mesh));
 }
 
+/// Regression: an MTL colour with fewer than three numbers (`Kd 0.5`, legal MTL: `g` and
+/// `b` default to `r`) panicked inside tobj; now it is that grey, and an empty `Kd` line
+/// is ignored.
+#[test]
+fn mtl_colours_with_fewer_than_three_numbers_panicked() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "short.mtl",
+        "newmtl grey\nKd 0.5\nKe 2 3\n\nnewmtl bare\nKd\nKs\r\nKa 0.1\r\n",
+    );
+    let obj = write(
+        dir.path(),
+        "short.obj",
+        "mtllib short.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl grey\nf 1 2 3\nusemtl bare\nf 1 2 3\n",
+    );
+    let file = load_mesh_with_materials(&obj).unwrap();
+    assert_eq!(file.warning, None);
+    let m = &file.materials;
+    assert_eq!(
+        (m.of(0).albedo, m.of(0).emission),
+        ([0.5; 3], [2.0, 3.0, 2.0])
+    );
+    assert_eq!(
+        m.of(1).albedo,
+        Material::default().albedo,
+        "an empty Kd is no colour"
+    );
+}
+
 /// A missing or broken MTL file leaves the mesh grey with a warning naming the file.
 #[test]
 fn obj_without_its_mtl_file_is_grey_with_a_warning() {

@@ -8,7 +8,36 @@ use crate::material::{Material, Materials};
 /// Reads the material library `name` (as an OBJ's `mtllib` names it) beside `obj`.
 pub(super) fn load_library(obj: &Path, name: &Path) -> tobj::MTLLoadResult {
     let folder = obj.parent().unwrap_or(Path::new(""));
-    tobj::load_mtl(folder.join(name))
+    let bytes = std::fs::read(folder.join(name)).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+    tobj::load_mtl_buf(&mut std::io::Cursor::new(complete_colours(&bytes)))
+}
+
+/// The colour keywords whose values tobj reads as exactly three numbers.
+const COLOURS: [&[u8]; 4] = [b"Ka", b"Kd", b"Ks", b"Ke"];
+
+/// The library with every colour given as three numbers. MTL lets `g` and `b` be left
+/// out (they then equal `r`: `Kd 0.5` is grey), but tobj panics on fewer than three; a
+/// colour line with no value at all is dropped, as if it were not there.
+fn complete_colours(bytes: &[u8]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(bytes.len() + 64);
+    for line in bytes.split_inclusive(|&b| b == b'\n') {
+        let words: Vec<&[u8]> = line
+            .split(|b| b.is_ascii_whitespace())
+            .filter(|w| !w.is_empty())
+            .collect();
+        match words.as_slice() {
+            [key, values @ ..] if COLOURS.contains(key) && values.len() < 3 => {
+                if let Some(&r) = values.first() {
+                    let mut padded = words.clone();
+                    padded.extend(std::iter::repeat_n(r, 3 - values.len()));
+                    out.extend_from_slice(&padded.join(&b' '));
+                    out.push(b'\n');
+                }
+            }
+            _ => out.extend_from_slice(line),
+        }
+    }
+    out
 }
 
 /// Our material for a tobj one: `Kd` as albedo (clamped to [0, 1]), `Ke` as emission. A
