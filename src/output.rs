@@ -13,8 +13,11 @@ use crate::render::Frame;
 /// An output image format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum OutputFormat {
-    /// 8-bit sRGB through the `image` crate (png, bmp, ppm, jpg).
+    /// 8-bit sRGB through the `image` crate (png, bmp, jpg).
     Display(ImageFormat),
+    /// 8-bit sRGB as binary PPM (`P6`), which every PPM reader takes (the `image` crate
+    /// writes PAM, `P7`, which most reject).
+    Ppm,
     /// OpenEXR, 32-bit float linear radiance.
     Exr,
     /// Portable float map, 32-bit float linear radiance.
@@ -31,7 +34,7 @@ pub(crate) fn image_format(path: &Path) -> Result<OutputFormat> {
     let format = match ext.as_str() {
         "png" => OutputFormat::Display(ImageFormat::Png),
         "bmp" => OutputFormat::Display(ImageFormat::Bmp),
-        "ppm" => OutputFormat::Display(ImageFormat::Pnm),
+        "ppm" => OutputFormat::Ppm,
         "jpg" | "jpeg" => OutputFormat::Display(ImageFormat::Jpeg),
         "exr" => OutputFormat::Exr,
         "pfm" => OutputFormat::Pfm,
@@ -76,6 +79,14 @@ pub(crate) fn write_image(frame: &Frame, path: &Path) -> Result<()> {
             write_atomically(path, |w| {
                 image
                     .write_to(w, format)
+                    .map_err(|e| Error::output(path, e))
+            })
+        }
+        OutputFormat::Ppm => {
+            let image = frame.to_rgb_image();
+            write_atomically(path, |w| {
+                write!(w, "P6\n{} {}\n255\n", frame.width, frame.height)
+                    .and_then(|()| w.write_all(image.as_raw()))
                     .map_err(|e| Error::output(path, e))
             })
         }

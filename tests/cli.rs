@@ -163,8 +163,13 @@ fn render_writes_the_format_its_extension_names() {
     // the format follows the extension, not just the name
     let bmp = std::fs::read(w.out("out.bmp")).unwrap();
     assert_eq!(&bmp[..2], b"BM");
+    // Regression: `.ppm` was PAM (`P7`), which most PPM readers refuse; it is binary PPM,
+    // the same pixels as the PNG.
     let ppm = std::fs::read(w.out("out.ppm")).unwrap();
-    assert_eq!(ppm[0], b'P');
+    let header = format!("P6\n{WIDTH} {HEIGHT}\n255\n");
+    assert!(ppm.starts_with(header.as_bytes()), "{:?}", &ppm[..8]);
+    let png_pixels = image::open(w.out("OUT.PNG")).unwrap().to_rgb8().into_raw();
+    assert_eq!(&ppm[header.len()..], &png_pixels[..]);
     let jpg = std::fs::read(w.out("out.jpg")).unwrap();
     assert_eq!(&jpg[..2], &[0xFF, 0xD8]);
     let png = std::fs::read(w.out("OUT.PNG")).unwrap();
