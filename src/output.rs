@@ -161,16 +161,18 @@ pub(crate) fn write_atomically(
     fill: impl FnOnce(&mut BufWriter<&mut std::fs::File>) -> Result<()>,
 ) -> Result<()> {
     let folder = folder_of(path);
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".cltrace-")
-        .suffix(".tmp")
-        .tempfile_in(folder)
-        .map_err(|e| {
-            Error::output(
-                path,
-                format!("cannot create a file in {}: {e}", folder.display()),
-            )
-        })?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".cltrace-").suffix(".tmp");
+    // A temporary file is private (0600); the image it becomes is an ordinary file, as
+    // readable as the user's umask lets any new file be.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let mut tmp = builder.tempfile_in(folder).map_err(|e| {
+        Error::output(
+            path,
+            format!("cannot create a file in {}: {e}", folder.display()),
+        )
+    })?;
     {
         let mut w = BufWriter::new(tmp.as_file_mut());
         fill(&mut w)?;

@@ -177,6 +177,40 @@ fn render_writes_the_format_its_extension_names() {
     assert_eq!(w.out_entries().len(), 5, "{:?}", w.out_entries());
 }
 
+/// Regression: every output was mode 0600 (the temporary file's) whatever the umask; an
+/// image and a hit record file are as readable as the umask lets new files be.
+#[cfg(unix)]
+#[test]
+fn outputs_honour_the_umask() {
+    use std::os::unix::fs::PermissionsExt;
+    let w = Work::new();
+    let png = w.out("out.png");
+    let hits = w.out("out.hits");
+    for (umask, mode) in [("027", 0o640), ("022", 0o644)] {
+        let mut args = render_args(&w.quad(), &png, "cpu-brute");
+        args.extend(["--hits".into(), hits.display().to_string()]);
+        let inner = cltrace(&w.input, &args);
+        // The same command, started by a shell that sets the umask first.
+        let mut cmd = std::process::Command::new("sh");
+        cmd.arg("-c")
+            .arg(format!("umask {umask} && exec \"$0\" \"$@\""))
+            .arg(inner.get_program())
+            .args(inner.get_args())
+            .current_dir(&w.input);
+        for (key, value) in inner.get_envs() {
+            match value {
+                Some(v) => cmd.env(key, v),
+                None => cmd.env_remove(key),
+            };
+        }
+        succeeded(&run(cmd));
+        for file in [&png, &hits] {
+            let got = std::fs::metadata(file).unwrap().permissions().mode() & 0o777;
+            assert_eq!(got, mode, "{} under umask {umask}", file.display());
+        }
+    }
+}
+
 /// The hit records: (triangle, distance) per pixel, row-major.
 fn read_hits(path: &Path) -> Vec<(u32, f32)> {
     let bytes = std::fs::read(path).unwrap();
