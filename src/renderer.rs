@@ -287,6 +287,15 @@ impl<'d> Renderer<'d> {
         Ok(times)
     }
 
+    /// What the OpenCL kernels run with: the BVH layout (`None` for brute force) and the
+    /// work-group shape; `None` for the host methods.
+    pub(crate) fn kernels(&self) -> Option<(Option<Layout>, [usize; 2])> {
+        match &self.tracer {
+            Tracer::Cl(t) => Some((t.layout(), t.work_group())),
+            _ => None,
+        }
+    }
+
     /// Sets the OpenCL kernels' work-group shape (ignored by the host methods).
     pub(crate) fn set_work_group(&mut self, shape: [usize; 2]) -> Result<()> {
         match &mut self.tracer {

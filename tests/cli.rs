@@ -150,6 +150,25 @@ fn render_png_on_the_cpu() {
     assert_eq!(w.out_entries(), ["out.png"]);
 }
 
+/// Regression: `render --help` listed the 8-bit formats only; it names every format the
+/// extension can choose.
+#[test]
+fn render_help_names_every_output_format() {
+    let w = Work::new();
+    let out = run(cltrace(&w.input, &["render", "--help"]));
+    succeeded(&out);
+    let help = text(&out.stdout);
+    let line = help
+        .lines()
+        .skip_while(|l| !l.contains("--output"))
+        .take(3)
+        .collect::<Vec<_>>()
+        .join(" ");
+    for format in ["png", "bmp", "ppm", "jpg", "exr", "pfm"] {
+        assert!(line.contains(format), "{format} missing from {line:?}");
+    }
+}
+
 #[test]
 fn render_writes_the_format_its_extension_names() {
     let w = Work::new();

@@ -170,6 +170,65 @@ fn render_reads_the_tuning_cache_it_is_pointed_at() {
     );
 }
 
+/// `render -v` names the layout and work-group its kernels run with, and where they came
+/// from: the tuning cache's (its work-group too), a flag's, or the device's default.
+#[test]
+fn verbose_render_names_its_kernels_and_the_tuning_cache() {
+    let dir = tempfile::tempdir().unwrap();
+    let device = test_device();
+    let kernels_line = |cache: Option<&Path>, extra: &[&str]| {
+        let png = dir.path().join("render.png");
+        let mut cmd = cltrace();
+        cmd.args(["render", "-v", "--width", "32", "--height", "24"])
+            .args(["--method", "cl-bvh", "--device", &device.index()])
+            .arg("-o")
+            .arg(&png)
+            .args(extra);
+        if let Some(cache) = cache {
+            cmd.env("CLTRACE_TUNE_CACHE", cache);
+        }
+        let out = run(cmd);
+        succeeded(&out);
+        let stderr = text(&out.stderr);
+        stderr
+            .lines()
+            .find(|l| l.starts_with("kernels: "))
+            .unwrap_or_else(|| panic!("no `kernels:` line in the verbose output:\n{stderr}"))
+            .to_string()
+    };
+    let default = default_layout(&device);
+    assert!(
+        kernels_line(None, &[]).starts_with(&format!(
+            "kernels: {} layout (the device's default), ",
+            default.name()
+        )),
+        "{}",
+        kernels_line(None, &[])
+    );
+    let cache = dir.path().join("tune.toml");
+    let shape = if device.max_work_group_size >= 64 {
+        [16, 4]
+    } else {
+        [1, 1]
+    };
+    write_cache(&cache, &device, Layout::Bin32, shape);
+    let line = kernels_line(Some(&cache), &[]);
+    assert_eq!(
+        line,
+        format!(
+            "kernels: bin32 layout (tuning cache), {}x{} work-groups, tuned in {}",
+            shape[0],
+            shape[1],
+            cache.display()
+        )
+    );
+    let line = kernels_line(Some(&cache), &["--layout", "cwbvh"]);
+    assert!(
+        line.starts_with("kernels: cwbvh layout (asked for), "),
+        "{line}"
+    );
+}
+
 /// Splits a Markdown table's body rows into cells.
 fn markdown_rows(table: &str) -> (Vec<String>, Vec<Vec<String>>) {
     let cells = |line: &str| -> Vec<String> {

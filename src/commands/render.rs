@@ -271,6 +271,7 @@ fn render_with(
             .and_then(|path| crate::tune::TuneCache::load(path).get(&d.info).cloned()),
         _ => None,
     };
+    let tuned_layout = tuned.as_ref().map(|t| t.layout);
     let options = PrepareOptions {
         build: req.build,
         layout: render.layout.or(tuned.as_ref().map(|t| t.layout)),
@@ -285,6 +286,21 @@ fn render_with(
         device.as_ref(),
         &mut timings,
     )?;
+    if let Some((layout, [across, down])) = renderer.kernels() {
+        let what = match layout {
+            None => "brute force".to_string(),
+            Some(l) if render.layout.is_some() => format!("{} layout (asked for)", l.name()),
+            Some(l) if tuned_layout == Some(l) => format!("{} layout (tuning cache)", l.name()),
+            Some(l) => format!("{} layout (the device's default)", l.name()),
+        };
+        let cache = match (&req.tune_cache, tuned_layout) {
+            (Some(path), Some(_)) => format!(", tuned in {}", path.display()),
+            _ => String::new(),
+        };
+        v.detail(format!(
+            "kernels: {what}, {across}x{down} work-groups{cache}"
+        ));
+    }
     if let Some(s) = &renderer.bvh {
         v.detail(format!(
             "bvh: {} nodes, {} leaves, depth {}, mean leaf {:.2}, SAH cost {:.2}, {} threads",

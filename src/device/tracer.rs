@@ -442,6 +442,11 @@ impl<'d> ClTracer<'d> {
         })
     }
 
+    /// The work-group shape (pixels across, down) the kernels launch with.
+    pub(crate) fn work_group(&self) -> [usize; 2] {
+        self.local
+    }
+
     /// Sets the work-group shape (pixels across, down) of the kernels; `cltrace tune` finds
     /// the best one per device. Shapes the device cannot run are refused.
     pub(crate) fn set_work_group(&mut self, local: [usize; 2]) -> Result<()> {

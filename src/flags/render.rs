@@ -23,7 +23,8 @@ pub struct RenderArgs {
     /// scene when omitted. Flags override the scene file's settings.
     scene: Option<PathBuf>,
 
-    /// Output image; the format follows the extension: png, bmp, ppm, jpg
+    /// Output image; the format follows the extension: png, bmp, ppm, jpg (8-bit sRGB),
+    /// exr, pfm (32-bit float, linear)
     #[arg(short, long, default_value = "render.png")]
     output: PathBuf,
 
