@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use std::sync::atomic::Ordering;
 
 use cltrace::commands::{bench, bvh, devices, render, tune};
+use cltrace::report::{print_data, print_message};
 use flags::Command;
 
 fn main() -> ExitCode {
@@ -23,15 +24,15 @@ fn main() -> ExitCode {
     });
     let result = match command {
         Command::Render(args) => render::render(&args.request()),
-        Command::Devices => devices::devices_table().map(|table| print!("{table}")),
+        Command::Devices => devices::devices_table().map(|table| print_data(&table)),
         Command::Bench(args) => bench::bench(&args.command()),
         Command::Tune(args) => tune::tune(&args.request()),
-        Command::Bvh(args) => bvh::bvh_report(&args.request()).map(|report| print!("{report}")),
+        Command::Bvh(args) => bvh::bvh_report(&args.request()).map(|report| print_data(&report)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
+            print_message(&format!("error: {e}"));
             ExitCode::from(e.exit_code() as u8)
         }
     }

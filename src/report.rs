@@ -1,7 +1,25 @@
 //! What cltrace tells the user on stderr: stage timings, details, progress. stdout is kept
 //! for data (device lists, tables).
 
+use std::io::Write;
 use std::time::Instant;
+
+/// Writes data (a table, a device list) to stdout. A reader that has gone (`| head`) ends
+/// the process quietly with status 0, as Unix tools do, instead of a panic.
+pub fn print_data(text: &str) {
+    let mut out = std::io::stdout().lock();
+    if let Err(e) = out.write_all(text.as_bytes()).and_then(|()| out.flush())
+        && e.kind() == std::io::ErrorKind::BrokenPipe
+    {
+        std::process::exit(0);
+    }
+}
+
+/// Writes a line to stderr. Messages are best effort: with stderr closed the work goes on
+/// without them, never panics.
+pub fn print_message(line: &str) {
+    let _ = writeln!(std::io::stderr().lock(), "{line}");
+}
 
 /// How much to say on stderr.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord)]
@@ -30,14 +48,14 @@ impl Verbosity {
     /// Prints a line at normal verbosity and above.
     pub(crate) fn say(self, line: impl AsRef<str>) {
         if self >= Verbosity::Normal {
-            eprintln!("{}", line.as_ref());
+            print_message(line.as_ref());
         }
     }
 
     /// Prints a line with `--verbose` only.
     pub(crate) fn detail(self, line: impl AsRef<str>) {
         if self >= Verbosity::Verbose {
-            eprintln!("{}", line.as_ref());
+            print_message(line.as_ref());
         }
     }
 

@@ -196,6 +196,45 @@ fn render_writes_the_format_its_extension_names() {
     assert_eq!(w.out_entries().len(), 5, "{:?}", w.out_entries());
 }
 
+/// Runs `shell` in bash with `"$0" "$@"` standing for the `cltrace` command line `args`,
+/// then prints `status N`, the exit status of the pipeline's first command.
+fn pipeline(w: &Work, args: &[String], shell: &str) -> (String, String) {
+    let inner = cltrace(&w.input, args);
+    let mut cmd = Command::new("bash");
+    cmd.arg("-c")
+        .arg(format!("{shell}; echo \"status ${{PIPESTATUS[0]}}\""))
+        .arg(inner.get_program())
+        .args(inner.get_args())
+        .current_dir(&w.input);
+    for (key, value) in inner.get_envs() {
+        match value {
+            Some(v) => cmd.env(key, v),
+            None => cmd.env_remove(key),
+        };
+    }
+    let out = run(cmd);
+    (text(&out.stdout), text(&out.stderr))
+}
+
+/// Regression: a reader that goes away (`| head`, `2>&1 | head -1`) made the binary panic
+/// (exit 101). A closed stdout ends it quietly with status 0; a closed stderr loses the
+/// messages but not the work.
+#[test]
+fn closed_pipes_end_quietly() {
+    let w = Work::new();
+    let devices = ["devices".to_string()];
+    // `true` reads nothing: every write to the pipe fails.
+    let (stdout, stderr) = pipeline(&w, &devices, "\"$0\" \"$@\" | true");
+    assert!(stdout.contains("status 0"), "{stdout} {stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let png = w.out("out.png");
+    let mut args = render_args(&w.quad(), &png, "cpu-brute");
+    args.push("-v".into());
+    let (stdout, stderr) = pipeline(&w, &args, "\"$0\" \"$@\" 2>&1 | true");
+    assert!(stdout.contains("status 0"), "{stdout} {stderr}");
+    check_image(&png, WIDTH, HEIGHT);
+}
+
 /// Regression: every output was mode 0600 (the temporary file's) whatever the umask; an
 /// image and a hit record file are as readable as the umask lets new files be.
 #[cfg(unix)]

@@ -314,7 +314,9 @@ pub(crate) fn run(req: &BenchRequest) -> Result<Vec<BenchRow>> {
                                 kind,
                             )?;
                             if req.verbosity >= Verbosity::Verbose {
-                                bar.suspend(|| eprintln!("{}", table::row_line(&row)));
+                                bar.suspend(|| {
+                                    crate::report::print_message(&table::row_line(&row))
+                                });
                             }
                             rows.push(row);
                             bar.inc(1);

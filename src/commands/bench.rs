@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use crate::bench::{self, BenchRequest};
 use crate::error::Result;
 use crate::output::check_folder;
+use crate::report::print_data;
 
 /// Everything `cltrace bench` was asked to do.
 #[derive(Clone, Debug)]
@@ -30,14 +31,14 @@ pub fn bench(cmd: &BenchCommand) -> Result<()> {
     }
     let rows = if cmd.scaling {
         let rows = bench::run(&bench::scaling_request(&cmd.request))?;
-        print!("{}", bench::scaling_table(&rows));
+        print_data(&bench::scaling_table(&rows));
         if let Some(plot) = &cmd.plot {
             bench::plot_scaling(&rows, plot)?;
         }
         rows
     } else {
         let rows = bench::run(&cmd.request)?;
-        print!("{}", bench::markdown(&rows));
+        print_data(&bench::markdown(&rows));
         rows
     };
     if let Some(csv) = &cmd.csv {

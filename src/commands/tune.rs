@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use crate::device::{ClDevice, DeviceSelector, list_devices};
 use crate::error::{Error, Result};
 use crate::input::scene_file::SceneDescription;
-use crate::report::Verbosity;
+use crate::report::{Verbosity, print_data};
 use crate::tune::{TuneCache, Tuning, tune_device};
 
 /// Everything `cltrace tune` was asked to do.
@@ -45,8 +45,8 @@ pub fn tune(req: &TuneRequest) -> Result<()> {
             .collect::<Result<_>>()?,
     };
     let mut cache = TuneCache::load(path);
-    println!(
-        "| device | layout | work-group | primary Mrays/s | diffuse Mrays/s |\n|---|---|---|---|---|"
+    print_data(
+        "| device | layout | work-group | primary Mrays/s | diffuse Mrays/s |\n|---|---|---|---|---|\n",
     );
     for info in chosen {
         let device = ClDevice::open(info)?;
@@ -56,15 +56,15 @@ pub fn tune(req: &TuneRequest) -> Result<()> {
             scene.mesh.name()
         ));
         let results = tune_device(&device, &mesh, req.repetitions, &mut |r| {
-            println!(
-                "| {} | {} | {}x{} | {:.1} | {:.1} |",
+            print_data(&format!(
+                "| {} | {} | {}x{} | {:.1} | {:.1} |\n",
                 device.info.name,
                 r.layout.name(),
                 r.work_group[0],
                 r.work_group[1],
                 r.primary_mrays,
                 r.diffuse_mrays
-            );
+            ));
         })?;
         let best = &results[0];
         verbosity.say(format!(

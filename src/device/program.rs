@@ -336,7 +336,10 @@ impl ClDevice {
             )));
         }
         if std::env::var_os(BUILD_LOG_VAR).is_some() {
-            eprintln!("build log of {name} ({options:?}):\n{}", log().trim_end());
+            crate::report::print_message(&format!(
+                "build log of {name} ({options:?}):\n{}",
+                log().trim_end()
+            ));
         }
         Ok(ocl::Program::from(program))
     }

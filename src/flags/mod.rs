@@ -75,7 +75,7 @@ pub fn parse() -> Result<Command, ExitCode> {
                 .lines()
                 .find(|l| !l.trim().is_empty())
                 .unwrap_or("error: invalid arguments");
-            eprintln!("{} (see --help)", first.trim_end());
+            cltrace::report::print_message(&format!("{} (see --help)", first.trim_end()));
             Err(ExitCode::from(2))
         }
     }
