@@ -116,6 +116,10 @@ fn files_made_at_run_time_are_refused_too() {
     let folder = dir.path().join("folder.obj");
     std::fs::create_dir(&folder).unwrap();
     cases.push((folder, "folder.obj".to_string()));
+    // Regression: one without a mesh extension was "unknown mesh format"; it is a folder.
+    let plain = dir.path().join("scans");
+    std::fs::create_dir(&plain).unwrap();
+    cases.push((plain, "scans".to_string()));
 
     // One face line with three million vertices, the last of them past the vertex list.
     let huge = dir.path().join("huge_face.obj");

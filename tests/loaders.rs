@@ -940,6 +940,19 @@ fn obj_materials_come_from_the_mtl_file() {
     assert_eq!(corners(&load_mesh(&obj).unwrap()), corners(&file.mesh));
 }
 
+/// Regression: a folder without a mesh extension was refused as an "unknown mesh format";
+/// it is named a directory, with or without one.
+#[test]
+fn a_folder_as_the_mesh_was_an_unknown_format() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["scans", "scans.obj", "scans.ply.gz"] {
+        let folder = dir.path().join(name);
+        std::fs::create_dir(&folder).unwrap();
+        let e = load_mesh(&folder).unwrap_err().to_string();
+        assert!(e.contains(name) && e.contains("is a directory"), "{e}");
+    }
+}
+
 /// Regression: an MTL colour with fewer than three numbers (`Kd 0.5`, legal MTL: `g` and
 /// `b` default to `r`) panicked inside tobj; now it is that grey, and an empty `Kd` line
 /// is ignored.

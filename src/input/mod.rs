@@ -66,6 +66,10 @@ pub fn load_mesh_with_materials(path: &Path) -> Result<MeshFile> {
 }
 
 fn read_mesh(path: &Path, read_materials: bool) -> Result<MeshFile> {
+    // A folder is named as one whatever its name, before its extension is judged.
+    if path.is_dir() {
+        return Err(Error::input(path, "is a directory, not a mesh file"));
+    }
     let (format, gzip) = MeshFormat::from_path(path).ok_or_else(|| {
         Error::input(
             path,
