@@ -555,6 +555,36 @@ fn bad_options_exit_2() {
     fails(&w, &with(base(), &["--up", "0,0,0"]), &[], 2);
 }
 
+/// Regression: a negative or fractional whole-number flag was refused as "not in
+/// 0..=4294967295"; the error says what is wrong with the value, and the range checks that
+/// know each flag's limits still speak for values in range.
+#[test]
+fn whole_number_flags_say_what_is_wrong() {
+    let w = Work::new();
+    let quad = w.quad();
+    let png = w.out("out.png");
+    let no_size = || unsized_args(&quad, &png, "cpu-brute");
+    for (flags, expected) in [
+        (&["--width", "-5", "--height", "8"][..], "negative"),
+        (&["--width", "1.5", "--height", "8"], "not a whole number"),
+        (&["--width", "8", "--height", "x"], "not a number"),
+        (&["--width", "99999999999", "--height", "8"], "too large"),
+        (
+            &["--width", "8", "--height", "8", "--spp", "-1"],
+            "negative",
+        ),
+        (
+            &["--width", "8", "--height", "8", "--bins", "-3"],
+            "negative",
+        ),
+        (&["--width", "0", "--height", "8"], "between 1 and 16384"),
+    ] {
+        let msg = fails(&w, &with(no_size(), flags), &[], 2);
+        assert!(msg.contains(expected), "{flags:?}: {msg}");
+        assert!(!msg.contains("4294967295"), "{flags:?}: {msg}");
+    }
+}
+
 #[test]
 fn output_folder_that_does_not_exist_exits_2() {
     // Refused before any work as a bad option (exit 2), and the folder is not created.

@@ -12,7 +12,7 @@ use cltrace::render::Method;
 use cltrace::report::Verbosity;
 
 use super::build::BuildArgs;
-use super::values::{all_names, choice, device_list, parse_resolution};
+use super::values::{all_names, choice, device_list, parse_resolution, whole_number};
 
 /// Every method, every layout, every ray kind: the defaults of the lists.
 static METHODS: LazyLock<String> = LazyLock::new(all_names::<Method>);
@@ -75,11 +75,11 @@ pub struct BenchArgs {
     resolutions: Vec<(u32, u32)>,
 
     /// Untimed frames before the timed ones
-    #[arg(long, default_value_t = 1)]
+    #[arg(value_parser = whole_number, long, default_value_t = 1)]
     warmup: u32,
 
     /// Timed frames per run
-    #[arg(long, default_value_t = 5)]
+    #[arg(value_parser = whole_number, long, default_value_t = 5)]
     repetitions: u32,
 
     /// Skip brute-force runs (all their frames) estimated to take longer than this, in seconds

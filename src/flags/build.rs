@@ -5,7 +5,7 @@ use clap::Args;
 use cltrace::bvh::optimize::{MAX_ROUNDS, MIN_ROUND_GAIN};
 use cltrace::bvh::{BuildOptions, Builder};
 
-use super::values::choice;
+use super::values::{choice, whole_number};
 
 /// BVH construction flags, shared by the commands that build one.
 #[derive(Args)]
@@ -15,14 +15,15 @@ pub struct BuildArgs {
     builder: Builder,
 
     /// Bins per axis for the binned builder (2 to 64)
-    #[arg(long, default_value_t = BuildOptions::default().bins)]
+    #[arg(value_parser = whole_number, long, default_value_t = BuildOptions::default().bins)]
     bins: u32,
 
     /// Largest leaf, in triangles (1 to 255); the SAH decides below it
-    #[arg(long, default_value_t = BuildOptions::default().max_leaf_size)]
+    #[arg(value_parser = whole_number, long, default_value_t = BuildOptions::default().max_leaf_size)]
     max_leaf_size: u32,
 
     #[arg(
+        value_parser = whole_number,
         long,
         value_name = "N",
         default_value_t = BuildOptions::default().optimize_rounds,

@@ -1,5 +1,6 @@
 //! `cltrace bvh`'s flags.
 
+use super::values::whole_number;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -17,7 +18,7 @@ pub struct BvhArgs {
     build: BuildArgs,
 
     /// Build this many times and report the fastest
-    #[arg(long, default_value_t = 1)]
+    #[arg(value_parser = whole_number, long, default_value_t = 1)]
     repeat: u32,
 }
 

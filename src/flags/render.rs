@@ -15,7 +15,7 @@ use cltrace::render::{Method, Shade};
 use cltrace::report::Verbosity;
 
 use super::build::BuildArgs;
-use super::values::{choice, parse_vec3};
+use super::values::{choice, parse_vec3, whole_number};
 
 #[derive(Args)]
 pub struct RenderArgs {
@@ -71,10 +71,10 @@ enum Fallback {
 /// The scene file's `[camera]` keys, as flags.
 #[derive(Args)]
 struct CameraArgs {
-    #[arg(long, help = help::width())]
+    #[arg(value_parser = whole_number, long, help = help::width())]
     width: Option<u32>,
 
-    #[arg(long, help = help::height())]
+    #[arg(value_parser = whole_number, long, help = help::height())]
     height: Option<u32>,
 
     #[arg(long, help = help::fov())]
@@ -118,19 +118,19 @@ struct SettingsArgs {
     #[arg(long, value_parser = choice::<Shade>(), help = help::shade())]
     shade: Option<Shade>,
 
-    #[arg(long, help = help::spp())]
+    #[arg(value_parser = whole_number, long, help = help::spp())]
     spp: Option<u32>,
 
-    #[arg(long, help = help::seed())]
+    #[arg(value_parser = whole_number, long, help = help::seed())]
     seed: Option<u32>,
 
-    #[arg(long, help = help::ao_samples())]
+    #[arg(value_parser = whole_number, long, help = help::ao_samples())]
     ao_samples: Option<u32>,
 
     #[arg(long, help = help::ao_distance())]
     ao_distance: Option<f32>,
 
-    #[arg(long, help = help::max_bounces())]
+    #[arg(value_parser = whole_number, long, help = help::max_bounces())]
     max_bounces: Option<u32>,
 
     #[arg(long, allow_hyphen_values = true, help = help::light())]

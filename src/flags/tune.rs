@@ -7,7 +7,7 @@ use clap::Args;
 use cltrace::commands::tune::TuneRequest;
 use cltrace::report::Verbosity;
 
-use super::values::device_list;
+use super::values::{device_list, whole_number};
 
 #[derive(Args)]
 pub struct TuneArgs {
@@ -19,7 +19,7 @@ pub struct TuneArgs {
     devices: String,
 
     /// Timed frames per combination (after one warm-up frame)
-    #[arg(long, default_value_t = 3)]
+    #[arg(value_parser = whole_number, long, default_value_t = 3)]
     repetitions: u32,
 
     /// The cache file [default: CLTRACE_TUNE_CACHE, else ~/.cache/cltrace/tune.toml]

@@ -11,6 +11,19 @@ use cltrace::bench::RayKind;
 use cltrace::bvh::{Builder, Layout};
 use cltrace::render::{Method, Shade};
 
+/// The value of a whole-number flag (a size, a count, a seed). Each flag's own range is
+/// checked later, where the limit is known; this says only what is no whole number at all,
+/// in words rather than as clap's `0..=4294967295`.
+pub fn whole_number(s: &str) -> Result<u32, String> {
+    let t = s.trim();
+    t.parse::<u32>().map_err(|_| match t.parse::<i128>() {
+        Ok(v) if v < 0 => format!("{s} is negative: give a whole number, 0 or more"),
+        Ok(_) => format!("{s} is too large"),
+        Err(_) if t.parse::<f64>().is_ok() => format!("{s} is not a whole number"),
+        Err(_) => format!("`{s}` is not a number"),
+    })
+}
+
 /// A library enum a flag chooses among: every value, its name on the command line (which
 /// its `FromStr` reads back) and a line on it for `--help`.
 pub trait Choice: Copy + FromStr<Err = String> + Send + Sync + 'static {
