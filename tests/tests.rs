@@ -15,6 +15,7 @@ mod layout;
 mod limits;
 mod loaders;
 mod module_graph;
+mod oclgrind;
 mod opencl_vs_cpu;
 mod secondary;
 mod tracers;

@@ -24,13 +24,30 @@ impl<T: OclPrm> PitchedBuffer<T> {
         (width * size_of::<T>()).div_ceil(align) * align
     }
 
+    /// An image the kernels only write (hits, colours).
     pub(crate) fn new(device: &ClDevice, width: usize, height: usize) -> Result<Self> {
+        Self::with_flags(device, width, height, ocl::flags::MEM_WRITE_ONLY)
+    }
+
+    /// An image the kernels add to, so read as well as write (the accumulation of the
+    /// progressive modes): reading a write-only buffer is undefined behaviour in OpenCL,
+    /// which NVIDIA and PoCL tolerate and Oclgrind reports.
+    pub(crate) fn read_write(device: &ClDevice, width: usize, height: usize) -> Result<Self> {
+        Self::with_flags(device, width, height, ocl::flags::MEM_READ_WRITE)
+    }
+
+    fn with_flags(
+        device: &ClDevice,
+        width: usize,
+        height: usize,
+        flags: ocl::flags::MemFlags,
+    ) -> Result<Self> {
         let pitch_bytes = Self::pitch_bytes_for(device, width);
         debug_assert_eq!(pitch_bytes % size_of::<T>(), 0);
         let pitch = pitch_bytes / size_of::<T>();
         let buffer = ocl::Buffer::<T>::builder()
             .queue(device.queue.clone())
-            .flags(ocl::flags::MEM_WRITE_ONLY)
+            .flags(flags)
             .len(pitch * height)
             .build()
             .map_err(|e| device_error(&device.info, "allocating the output image", e))?;

@@ -522,7 +522,7 @@ impl<'d> ClTracer<'d> {
         let lights = self.lights.as_ref().expect("set above");
         // 16 bytes of radiance and 4 of ray count a pixel.
         let capacity = capacity::<Float4>(device, self.image_budget, w, h);
-        let accum = PitchedBuffer::<Float4>::new(device, w, capacity)?;
+        let accum = PitchedBuffer::<Float4>::read_write(device, w, capacity)?;
         let pitch = accum.pitch;
         let rays = ocl::Buffer::<u32>::builder()
             .queue(device.queue.clone())

@@ -1,0 +1,109 @@
+//! Every kernel under Oclgrind, an OpenCL device simulator that checks each memory access
+//! (and, with `--data-races`, each race): the brute-force and BVH programs of every layout,
+//! the primary-ray kernel and each progressive shade mode, and the ray-buffer kernel, on a
+//! tiny image. Any diagnostic fails the test. Skipped with a notice where `oclgrind` is
+//! not installed, except in CI (`CI` set), which installs it.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use crate::common::command::{cltrace, run, text};
+
+/// The `oclgrind` executable, if installed; in CI its absence fails the test.
+fn oclgrind() -> Option<PathBuf> {
+    let found = std::env::var_os("PATH").and_then(|paths| {
+        std::env::split_paths(&paths)
+            .map(|p| p.join("oclgrind"))
+            .find(|p| p.is_file())
+    });
+    if found.is_none() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI must run the kernels under Oclgrind: install it (apt-get install oclgrind)"
+        );
+        eprintln!("notice: oclgrind is not installed: the kernels are not checked under it");
+    }
+    found
+}
+
+/// Runs `cltrace args` under Oclgrind's checks; returns its diagnostics ("" for none) after
+/// checking the run succeeded.
+fn checked(oclgrind: &Path, dir: &Path, args: &[&str]) -> String {
+    let log = dir.join("oclgrind.log");
+    let _ = std::fs::remove_file(&log);
+    let inner = cltrace();
+    let mut cmd = Command::new(oclgrind);
+    cmd.args(["--check-api", "--data-races", "--log"])
+        .arg(&log)
+        .arg(inner.get_program())
+        .args(args)
+        .current_dir(dir)
+        .env_remove("CLTRACE_DEVICE");
+    for (key, value) in inner.get_envs() {
+        if let Some(v) = value {
+            cmd.env(key, v);
+        }
+    }
+    let out = run(cmd);
+    assert!(
+        out.status.success(),
+        "{args:?} under oclgrind: {}{}",
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+    std::fs::read_to_string(&log).unwrap_or_default()
+}
+
+#[test]
+fn every_kernel_runs_clean_under_oclgrind() {
+    let Some(oclgrind) = oclgrind() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/room.toml");
+    let scene = scene.to_str().unwrap();
+    let png = dir.path().join("out.png");
+    let png = png.to_str().unwrap();
+    let mut programs: Vec<Vec<&str>> = vec![vec!["--method", "cl-brute"]];
+    for layout in ["bin32", "bin64", "wide4", "wide8", "cwbvh"] {
+        programs.push(vec!["--method", "cl-bvh", "--layout", layout]);
+    }
+    let mut found = Vec::new();
+    for program in &programs {
+        for shade in ["lambert", "ao", "shadow", "path"] {
+            let mut args = vec!["render", scene, "-q", "-o", png];
+            args.extend(["--width", "8", "--height", "6", "--spp", "2"]);
+            args.extend(["--shade", shade]);
+            args.extend(program.iter().copied());
+            let log = checked(&oclgrind, dir.path(), &args);
+            if !log.trim().is_empty() {
+                found.push(format!("{args:?}:\n{log}"));
+            }
+        }
+    }
+    // The ray-buffer kernel: the bench's diffuse rays.
+    let args = [
+        "bench",
+        scene,
+        "-q",
+        "--methods",
+        "cl-bvh",
+        "--layouts",
+        "bin32,cwbvh",
+        "--rays",
+        "diffuse",
+        "--resolutions",
+        "8x6",
+        "--warmup",
+        "0",
+        "--repetitions",
+        "1",
+    ];
+    let log = checked(&oclgrind, dir.path(), &args);
+    if !log.trim().is_empty() {
+        found.push(format!("{args:?}:\n{log}"));
+    }
+    assert!(
+        found.is_empty(),
+        "Oclgrind's diagnostics:\n{}",
+        found.join("\n")
+    );
+}
