@@ -74,3 +74,18 @@ impl Error {
 
 /// The crate's result: [`Error`] unless said otherwise.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// The value among `all` whose `name` is `s`, for the `FromStr` of a named choice (a
+/// layout, a method, ...); else an error naming every choice: "`x` is not a `what`: use
+/// a, b, c".
+pub(crate) fn by_name<T: Copy>(
+    s: &str,
+    all: &[T],
+    name: fn(T) -> &'static str,
+    what: &str,
+) -> std::result::Result<T, String> {
+    all.iter().copied().find(|v| name(*v) == s).ok_or_else(|| {
+        let names: Vec<&str> = all.iter().map(|v| name(*v)).collect();
+        format!("`{s}` is not a {what}: use {}", names.join(", "))
+    })
+}

@@ -5,7 +5,7 @@ use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use crate::common::command::{run, succeeded, text};
+use crate::common::command::{run, succeeded, text, wrapped};
 
 const WIDTH: u32 = 64;
 const HEIGHT: u32 = 48;
@@ -199,19 +199,8 @@ fn render_writes_the_format_its_extension_names() {
 /// Runs `shell` in bash with `"$0" "$@"` standing for the `cltrace` command line `args`,
 /// then prints `status N`, the exit status of the pipeline's first command.
 fn pipeline(w: &Work, args: &[String], shell: &str) -> (String, String) {
-    let inner = cltrace(&w.input, args);
-    let mut cmd = Command::new("bash");
-    cmd.arg("-c")
-        .arg(format!("{shell}; echo \"status ${{PIPESTATUS[0]}}\""))
-        .arg(inner.get_program())
-        .args(inner.get_args())
-        .current_dir(&w.input);
-    for (key, value) in inner.get_envs() {
-        match value {
-            Some(v) => cmd.env(key, v),
-            None => cmd.env_remove(key),
-        };
-    }
+    let script = format!("{shell}; echo \"status ${{PIPESTATUS[0]}}\"");
+    let cmd = wrapped(&cltrace(&w.input, args), "bash", &["-c", &script]);
     let out = run(cmd);
     (text(&out.stdout), text(&out.stderr))
 }
@@ -247,20 +236,9 @@ fn outputs_honour_the_umask() {
     for (umask, mode) in [("027", 0o640), ("022", 0o644)] {
         let mut args = render_args(&w.quad(), &png, "cpu-brute");
         args.extend(["--hits".into(), hits.display().to_string()]);
-        let inner = cltrace(&w.input, &args);
         // The same command, started by a shell that sets the umask first.
-        let mut cmd = std::process::Command::new("sh");
-        cmd.arg("-c")
-            .arg(format!("umask {umask} && exec \"$0\" \"$@\""))
-            .arg(inner.get_program())
-            .args(inner.get_args())
-            .current_dir(&w.input);
-        for (key, value) in inner.get_envs() {
-            match value {
-                Some(v) => cmd.env(key, v),
-                None => cmd.env_remove(key),
-            };
-        }
+        let script = format!("umask {umask} && exec \"$0\" \"$@\"");
+        let cmd = wrapped(&cltrace(&w.input, &args), "sh", &["-c", &script]);
         succeeded(&run(cmd));
         for file in [&png, &hits] {
             let got = std::fs::metadata(file).unwrap().permissions().mode() & 0o777;

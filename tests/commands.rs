@@ -29,11 +29,16 @@ fn test_device() -> DeviceInfo {
         .clone()
 }
 
-/// `cltrace render -v` of the built-in scene at 32x24 through `cl-bvh` on the test device,
-/// with `extra` flags and, if given, `CLTRACE_TUNE_CACHE` pointing at `cache`. Returns the
-/// SAH cost the verbose `bvh:` line reports: it is the cost of the tree as laid out, so it
-/// tells the layouts that are not alike apart.
-fn render_sah(dir: &Path, device: &DeviceInfo, cache: Option<&Path>, extra: &[&str]) -> String {
+/// `cltrace render -v` of the built-in scene at 32x24 through `cl-bvh` on `device`, with
+/// `extra` flags and, if given, `CLTRACE_TUNE_CACHE` pointing at `cache`: its verbose line
+/// starting with `prefix`.
+fn verbose_line(
+    dir: &Path,
+    device: &DeviceInfo,
+    cache: Option<&Path>,
+    extra: &[&str],
+    prefix: &str,
+) -> String {
     let png = dir.join("render.png");
     let mut cmd = cltrace();
     cmd.args(["render", "-v", "--width", "32", "--height", "24"])
@@ -49,10 +54,17 @@ fn render_sah(dir: &Path, device: &DeviceInfo, cache: Option<&Path>, extra: &[&s
     assert!(png.is_file(), "no image");
     std::fs::remove_file(&png).unwrap();
     let stderr = text(&out.stderr);
-    let line = stderr
+    stderr
         .lines()
-        .find(|l| l.starts_with("bvh: "))
-        .unwrap_or_else(|| panic!("no `bvh:` line in the verbose output:\n{stderr}"));
+        .find(|l| l.starts_with(prefix))
+        .unwrap_or_else(|| panic!("no `{prefix}` line in the verbose output:\n{stderr}"))
+        .to_string()
+}
+
+/// The SAH cost the verbose `bvh:` line of [`verbose_line`]'s render reports: it is the
+/// cost of the tree as laid out, so it tells the layouts that are not alike apart.
+fn render_sah(dir: &Path, device: &DeviceInfo, cache: Option<&Path>, extra: &[&str]) -> String {
+    let line = verbose_line(dir, device, cache, extra, "bvh: ");
     line.split("SAH cost ")
         .nth(1)
         .and_then(|rest| rest.split(',').next())
@@ -177,24 +189,7 @@ fn verbose_render_names_its_kernels_and_the_tuning_cache() {
     let dir = tempfile::tempdir().unwrap();
     let device = test_device();
     let kernels_line = |cache: Option<&Path>, extra: &[&str]| {
-        let png = dir.path().join("render.png");
-        let mut cmd = cltrace();
-        cmd.args(["render", "-v", "--width", "32", "--height", "24"])
-            .args(["--method", "cl-bvh", "--device", &device.index()])
-            .arg("-o")
-            .arg(&png)
-            .args(extra);
-        if let Some(cache) = cache {
-            cmd.env("CLTRACE_TUNE_CACHE", cache);
-        }
-        let out = run(cmd);
-        succeeded(&out);
-        let stderr = text(&out.stderr);
-        stderr
-            .lines()
-            .find(|l| l.starts_with("kernels: "))
-            .unwrap_or_else(|| panic!("no `kernels:` line in the verbose output:\n{stderr}"))
-            .to_string()
+        verbose_line(dir.path(), &device, cache, extra, "kernels: ")
     };
     let default = default_layout(&device);
     assert!(

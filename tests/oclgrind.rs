@@ -4,10 +4,8 @@
 //! tiny image. Any diagnostic fails the test. Skipped with a notice where `oclgrind` is
 //! not installed, except in CI (`CI` set), which installs it.
 
+use crate::common::command::{cltrace, run, text, wrapped};
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-use crate::common::command::{cltrace, run, text};
 
 /// The `oclgrind` executable, if installed; in CI its absence fails the test.
 fn oclgrind() -> Option<PathBuf> {
@@ -31,19 +29,17 @@ fn oclgrind() -> Option<PathBuf> {
 fn checked(oclgrind: &Path, dir: &Path, args: &[&str]) -> String {
     let log = dir.join("oclgrind.log");
     let _ = std::fs::remove_file(&log);
-    let inner = cltrace();
-    let mut cmd = Command::new(oclgrind);
-    cmd.args(["--check-api", "--data-races", "--log"])
-        .arg(&log)
-        .arg(inner.get_program())
+    let mut inner = cltrace();
+    inner
         .args(args)
         .current_dir(dir)
         .env_remove("CLTRACE_DEVICE");
-    for (key, value) in inner.get_envs() {
-        if let Some(v) = value {
-            cmd.env(key, v);
-        }
-    }
+    let log_arg = log.to_str().expect("a UTF-8 temporary path");
+    let cmd = wrapped(
+        &inner,
+        oclgrind.to_str().expect("a UTF-8 path"),
+        &["--check-api", "--data-races", "--log", log_arg],
+    );
     let out = run(cmd);
     assert!(
         out.status.success(),

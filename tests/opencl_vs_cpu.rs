@@ -5,7 +5,7 @@
 //! [`device_frames_match`] over the OpenCL tracers (`DeviceTracer`), and the ray-buffer
 //! tests ask every tracer on both sides the same rays.
 
-use crate::common::tracers::{DeviceTracer, Ties, check_device, check_host, in_file_order};
+use crate::common::tracers::{DeviceTracer, Ties, check_every_device, check_host, in_file_order};
 use crate::common::*;
 use cltrace::bvh::Bin32Bvh;
 use cltrace::bvh::Layout;
@@ -381,16 +381,9 @@ fn ray_buffers_match_the_host_for_closest_and_any_hits() {
         check_host("cpu-brute", &brute, &rays, question, &triangles),
         check_host("cpu-bvh", &flat, &rays, question, &triangles),
     ];
-    for tracer in DeviceTracer::all() {
-        let mut cl = tracer.prepare(&device, &mesh, &BuildOptions::default());
-        results.push(check_device(
-            &tracer.name(),
-            &mut cl,
-            &rays,
-            question,
-            &triangles,
-        ));
-    }
+    results.extend(check_every_device(
+        &device, &mesh, &rays, question, &triangles,
+    ));
     for hits in results {
         let hits = hits.unwrap_or_else(|e| panic!("{e}"));
         assert!(
@@ -432,16 +425,9 @@ fn rays_along_box_faces_match_brute_force() {
     let question = (f32::INFINITY, Ties::Allowed);
     let flat = Bin32Bvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
     let mut results = vec![check_host("cpu-bvh", &flat, &rays, question, &triangles)];
-    for tracer in DeviceTracer::all() {
-        let mut cl = tracer.prepare(&device, &mesh, &BuildOptions::default());
-        results.push(check_device(
-            &tracer.name(),
-            &mut cl,
-            &rays,
-            question,
-            &triangles,
-        ));
-    }
+    results.extend(check_every_device(
+        &device, &mesh, &rays, question, &triangles,
+    ));
     for hits in results {
         let hits = hits.unwrap_or_else(|e| panic!("{e}"));
         assert!(hits > rays.len() / 4, "{hits} of {} rays hit", rays.len());

@@ -73,15 +73,7 @@ impl std::str::FromStr for RayKind {
 
     /// The kind [`RayKind::name`] names.
     fn from_str(s: &str) -> Result<Self, String> {
-        RayKind::ALL
-            .into_iter()
-            .find(|k| k.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "`{s}` is not a ray kind: use {}",
-                    RayKind::ALL.map(RayKind::name).join(", ")
-                )
-            })
+        crate::error::by_name(s, &RayKind::ALL, RayKind::name, "ray kind")
     }
 }
 

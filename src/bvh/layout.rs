@@ -74,15 +74,7 @@ impl std::str::FromStr for Layout {
 
     /// The layout [`Layout::name`] names.
     fn from_str(s: &str) -> Result<Self, String> {
-        Layout::ALL
-            .into_iter()
-            .find(|l| l.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "`{s}` is not a layout: use {}",
-                    Layout::ALL.map(Layout::name).join(", ")
-                )
-            })
+        crate::error::by_name(s, &Layout::ALL, Layout::name, "layout")
     }
 }
 

@@ -102,15 +102,7 @@ impl std::str::FromStr for Builder {
 
     /// The builder [`Builder::name`] names.
     fn from_str(s: &str) -> Result<Self, String> {
-        Builder::ALL
-            .into_iter()
-            .find(|b| b.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "`{s}` is not a builder: use {}",
-                    Builder::ALL.map(Builder::name).join(", ")
-                )
-            })
+        crate::error::by_name(s, &Builder::ALL, Builder::name, "builder")
     }
 }
 

@@ -35,9 +35,16 @@ ocl_prm!(
 /// SIMD lanes), Aila–Laine binary nodes elsewhere (the fastest for primary and diffuse rays
 /// on the H100: docs/performance.md).
 pub fn default_layout(device: &DeviceInfo) -> Layout {
-    match device.kind {
-        DeviceKind::Cpu => Layout::Wide8,
-        _ => Layout::Bin64,
+    device.kind.default_layout()
+}
+
+impl DeviceKind {
+    /// The layout for an untuned device of this kind (see [`default_layout`]).
+    pub fn default_layout(self) -> Layout {
+        match self {
+            DeviceKind::Cpu => Layout::Wide8,
+            _ => Layout::Bin64,
+        }
     }
 }
 

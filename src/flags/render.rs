@@ -180,6 +180,7 @@ mod help {
         AO_DISTANCE_SHARE, DEFAULT_AO_SAMPLES, DEFAULT_LIGHT, DEFAULT_MAX_BOUNCES, DEFAULT_METHOD,
         DEFAULT_SEED, DEFAULT_SHADE, DEFAULT_SPP, MAX_AO_SAMPLES, MAX_BOUNCES, MAX_SPP,
     };
+    use cltrace::device::DeviceKind;
 
     /// `[default: scene's, else X]`.
     fn or_scene(default: impl Display) -> String {
@@ -217,11 +218,12 @@ mod help {
     pub fn layout() -> String {
         format!(
             "BVH node layout of cl-bvh {}",
-            // As `cltrace::device::default_layout` picks when nothing was tuned.
-            or_scene(
-                "the one `cltrace tune` found for the device, else wide8 on CPUs and bin64 \
-                 on other devices"
-            )
+            or_scene(format!(
+                "the one `cltrace tune` found for the device, else {} on CPUs and {} on \
+                 other devices",
+                DeviceKind::Cpu.default_layout().name(),
+                DeviceKind::Gpu.default_layout().name()
+            ))
         )
     }
 

@@ -88,15 +88,7 @@ impl std::str::FromStr for Method {
 
     /// The method [`Method::name`] names.
     fn from_str(s: &str) -> Result<Self, String> {
-        Method::ALL
-            .into_iter()
-            .find(|m| m.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "`{s}` is not a method: use {}",
-                    Method::ALL.map(Method::name).join(", ")
-                )
-            })
+        crate::error::by_name(s, &Method::ALL, Method::name, "method")
     }
 }
 
@@ -164,15 +156,7 @@ impl std::str::FromStr for Shade {
 
     /// The mode [`Shade::name`] names.
     fn from_str(s: &str) -> Result<Self, String> {
-        Shade::ALL
-            .into_iter()
-            .find(|m| m.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "`{s}` is not a shade mode: use {}",
-                    Shade::ALL.map(Shade::name).join(", ")
-                )
-            })
+        crate::error::by_name(s, &Shade::ALL, Shade::name, "shade mode")
     }
 }
 

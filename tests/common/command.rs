@@ -33,6 +33,25 @@ pub fn cltrace() -> Command {
     cmd
 }
 
+/// `inner` run through another program (`oclgrind`, a shell): `wrapper` with its own
+/// `args`, then `inner`'s program and arguments, with `inner`'s environment and folder.
+pub fn wrapped<S: AsRef<std::ffi::OsStr>>(inner: &Command, wrapper: &str, args: &[S]) -> Command {
+    let mut cmd = Command::new(wrapper);
+    cmd.args(args)
+        .arg(inner.get_program())
+        .args(inner.get_args());
+    if let Some(dir) = inner.get_current_dir() {
+        cmd.current_dir(dir);
+    }
+    for (key, value) in inner.get_envs() {
+        match value {
+            Some(v) => cmd.env(key, v),
+            None => cmd.env_remove(key),
+        };
+    }
+    cmd
+}
+
 /// Runs `cmd` to the end.
 pub fn run(mut cmd: Command) -> Output {
     cmd.output().expect("the cltrace binary runs")

@@ -255,6 +255,24 @@ pub fn agrees_with_brute_force<T: ClosestHit>(what: &str, make: impl Fn(&Mesh) -
     }
 }
 
+/// [`check_device`] on every device tracer ([`DeviceTracer::all`]) of `mesh`, each named
+/// after its tracer.
+pub fn check_every_device(
+    device: &ClDevice,
+    mesh: &Mesh,
+    rays: &[Ray],
+    question: (f32, Ties),
+    triangles: &[Triangle],
+) -> Vec<Result<usize, String>> {
+    DeviceTracer::all()
+        .into_iter()
+        .map(|tracer| {
+            let mut cl = tracer.prepare(device, mesh, &BuildOptions::default());
+            check_device(&tracer.name(), &mut cl, rays, question, triangles)
+        })
+        .collect()
+}
+
 /// The device tracer `tracer` finds brute force's closest hits (or ties) and valid any
 /// hits on every question mesh, through [`ClTracer::trace_rays`].
 pub fn device_agrees_with_brute_force(device: &ClDevice, tracer: DeviceTracer) {
