@@ -29,6 +29,10 @@ pub enum Error {
         /// Why, usually the operating system's reason.
         message: String,
     },
+    /// Ctrl-C (or `SIGTERM`) came before there was anything to write: nothing was written,
+    /// no file replaced.
+    #[error("interrupted: nothing written")]
+    Interrupted,
 }
 
 fn location(path: &Path, line: Option<usize>) -> String {
@@ -40,11 +44,15 @@ fn location(path: &Path, line: Option<usize>) -> String {
 
 impl Error {
     /// Bad input (mesh, scene, camera, options) exits with 2, like a usage error;
-    /// failures of the machine (device, output) with 1.
+    /// failures of the machine (device, output) with 1; an interruption with nothing
+    /// written with 130, as a shell reports a process ended by Ctrl-C (128 + `SIGINT`).
+    /// (A partial result written after an interruption is not an error: exit status 3,
+    /// [`crate::commands::Ending::Partial`].)
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Input { .. } | Error::Invalid(_) => 2,
             Error::Device(_) | Error::Output { .. } => 1,
+            Error::Interrupted => 130,
         }
     }
 

@@ -5,8 +5,8 @@
 //! (`tests/module_graph.rs` keeps it so):
 //!
 //! - [`error`], [`geometry`]: the error type; rays and boxes.
-//! - [`mesh`], [`camera`]: the triangle mesh every stage reads; the pinhole camera and its
-//!   exact pixel-to-ray arithmetic.
+//! - [`mesh`], [`camera`], [`interrupt`]: the triangle mesh every stage reads; the pinhole
+//!   camera and its exact pixel-to-ray arithmetic; the Ctrl-C flag long work polls.
 //! - [`intersect`]: the stored triangle, the watertight ray/triangle test and the robust
 //!   slab test (mirrored in `cl/intersect.cl`), and [`intersect::ClosestHit`], what every
 //!   host tracer answers.
@@ -30,6 +30,7 @@ pub mod error;
 pub mod geometry;
 
 pub mod camera;
+pub mod interrupt;
 pub mod mesh;
 
 pub mod intersect;

@@ -4,33 +4,41 @@
 mod flags;
 
 use std::process::ExitCode;
-use std::sync::atomic::Ordering;
 
-use cltrace::commands::{bench, bvh, devices, render, tune};
+use cltrace::commands::{Ending, bench, bvh, devices, render, tune};
+use cltrace::interrupt::{self, Request};
 use cltrace::report::{print_data, print_message};
 use flags::Command;
 
 fn main() -> ExitCode {
+    // The first Ctrl-C (or SIGTERM) asks the work to stop at its next band, sample pass or
+    // measurement and keep what it has (src/interrupt.rs); a second one ends the process.
+    let _ = ctrlc::set_handler(|| match interrupt::request() {
+        Request::Stop => print_message(
+            "interrupted: stopping at the next band or sample pass (Ctrl-C again to quit now)",
+        ),
+        Request::Wait => print_message("interrupted again: quitting once the file is written"),
+        Request::Exit => std::process::exit(130),
+    });
     let command = match flags::parse() {
         Ok(command) => command,
         Err(code) => return code,
     };
-    // The first Ctrl-C asks a progressive render to stop and write what it has; a second
-    // one ends the process at once.
-    let _ = ctrlc::set_handler(|| {
-        if render::STOP.swap(true, Ordering::SeqCst) {
-            std::process::exit(130);
-        }
-    });
     let result = match command {
         Command::Render(args) => render::render(&args.request()),
-        Command::Devices => devices::devices_table().map(|table| print_data(&table)),
+        Command::Devices => devices::devices_table().map(|table| {
+            print_data(&table);
+            Ending::Complete
+        }),
         Command::Bench(args) => bench::bench(&args.command()),
-        Command::Tune(args) => tune::tune(&args.request()),
-        Command::Bvh(args) => bvh::bvh_report(&args.request()).map(|report| print_data(&report)),
+        Command::Tune(args) => tune::tune(&args.request()).map(|()| Ending::Complete),
+        Command::Bvh(args) => bvh::bvh_report(&args.request()).map(|report| {
+            print_data(&report);
+            Ending::Complete
+        }),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(ending) => ExitCode::from(ending.exit_code()),
         Err(e) => {
             print_message(&format!("error: {e}"));
             ExitCode::from(e.exit_code() as u8)

@@ -1,6 +1,9 @@
 //! Output files: the image (format by extension) and the raw per-pixel hit records. Both
 //! are written under a temporary name beside the target and renamed into place, so a failed
-//! run never leaves a partial file.
+//! run never leaves a partial file. Every output is checked before any work starts
+//! ([`check_output`]): its folder exists and takes a new file. `/dev/null` takes any format
+//! and is not written at all; another special file (a named pipe) is written straight
+//! into, never renamed over.
 
 use std::io::{BufWriter, Write};
 use std::path::Path;
@@ -22,11 +25,19 @@ pub(crate) enum OutputFormat {
     Exr,
     /// Portable float map, 32-bit float linear radiance.
     Pfm,
+    /// `/dev/null`: nothing is encoded or written (a run for its hit records or timings).
+    Discard,
 }
+
+/// The path that discards an output.
+const DEV_NULL: &str = "/dev/null";
 
 /// The image format for `path`'s extension: png, bmp, ppm, jpg/jpeg, exr, pfm. Checked
 /// before any work starts, so that a long render never ends in "unknown format".
 pub(crate) fn image_format(path: &Path) -> Result<OutputFormat> {
+    if path == Path::new(DEV_NULL) {
+        return Ok(OutputFormat::Discard);
+    }
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
@@ -45,21 +56,63 @@ pub(crate) fn image_format(path: &Path) -> Result<OutputFormat> {
             )));
         }
     };
-    check_folder(path)?;
+    check_output(path)?;
     Ok(format)
 }
 
-/// Refuses an output path whose folder does not exist (before the render, not after).
-pub fn check_folder(path: &Path) -> Result<()> {
+/// Refuses, before any work, an output that could not be written after it: a folder that
+/// does not exist or takes no new file (permissions, a read-only file system), or a path
+/// that is a folder. Each is an [`Error::Output`] naming the user's path (exit status 1).
+pub fn check_output(path: &Path) -> Result<()> {
+    if path == Path::new(DEV_NULL) {
+        return Ok(());
+    }
+    if path.is_dir() {
+        return Err(Error::output(path, "is a directory"));
+    }
+    if is_special(path) {
+        return Ok(());
+    }
     let folder = folder_of(path);
     if !folder.is_dir() {
-        return Err(Error::Invalid(format!(
-            "{}: the folder {} does not exist",
-            path.display(),
-            folder.display()
-        )));
+        return Err(Error::output(
+            path,
+            format!("the folder {} does not exist", folder.display()),
+        ));
     }
-    Ok(())
+    // The only sure test of "can a file be made here" is making one; it is removed at once.
+    temporary_in(folder)
+        .map(drop)
+        .map_err(|e| cannot_create(path, folder, e))
+}
+
+/// "PATH: cannot create a file in FOLDER: the system's reason", without the temporary
+/// file's name, which tempfile puts in its errors and which means nothing to the user.
+fn cannot_create(path: &Path, folder: &Path, e: std::io::Error) -> Error {
+    let reason = match e.raw_os_error() {
+        Some(code) => std::io::Error::from_raw_os_error(code).to_string(),
+        None => e.kind().to_string(),
+    };
+    Error::output(
+        path,
+        format!("cannot create a file in {}: {reason}", folder.display()),
+    )
+}
+
+/// Whether `path` exists and is neither a regular file nor a folder (a named pipe, a
+/// device): such a file is written into, not replaced.
+fn is_special(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir())
+}
+
+/// A new temporary file in `folder`, as readable as the user's umask lets any new file be
+/// (tempfile makes it private, 0600, by default).
+fn temporary_in(folder: &Path) -> std::io::Result<tempfile::NamedTempFile> {
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".cltrace-").suffix(".tmp");
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    builder.tempfile_in(folder)
 }
 
 fn folder_of(path: &Path) -> &Path {
@@ -106,6 +159,7 @@ pub(crate) fn write_image(frame: &Frame, path: &Path) -> Result<()> {
                 write_pfm(w, frame.width, &pixels).map_err(|e| Error::output(path, e))
             })
         }
+        OutputFormat::Discard => Ok(()),
     }
 }
 
@@ -143,7 +197,10 @@ fn write_pfm(w: &mut impl Write, width: u32, pixels: &[[f32; 3]]) -> std::io::Re
 /// Writes the raw hit records: little-endian, row-major, 8 bytes a pixel (u32 triangle
 /// index, 0xFFFFFFFF for a miss, then f32 distance, +inf for a miss), no header.
 pub(crate) fn write_hits(frame: &Frame, path: &Path) -> Result<()> {
-    check_folder(path)?;
+    check_output(path)?;
+    if path == Path::new(DEV_NULL) {
+        return Ok(());
+    }
     write_atomically(path, |w| {
         let mut bytes = Vec::with_capacity(frame.hits.len() * 8);
         for h in &frame.hits {
@@ -155,24 +212,25 @@ pub(crate) fn write_hits(frame: &Frame, path: &Path) -> Result<()> {
 }
 
 /// Writes through `fill` into a temporary file in `path`'s folder, then renames it to
-/// `path`. On any failure the temporary file is removed and `path` is left untouched.
+/// `path`. On any failure the temporary file is removed and `path` is left untouched. A
+/// special file (a named pipe) is written straight into. A second Ctrl-C waits for the
+/// write ([`crate::interrupt::Writing`]).
 pub(crate) fn write_atomically(
     path: &Path,
     fill: impl FnOnce(&mut BufWriter<&mut std::fs::File>) -> Result<()>,
 ) -> Result<()> {
+    let _writing = crate::interrupt::Writing::start();
+    if is_special(path) {
+        let mut file = std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .map_err(|e| Error::output(path, e))?;
+        let mut w = BufWriter::new(&mut file);
+        fill(&mut w)?;
+        return w.flush().map_err(|e| Error::output(path, e));
+    }
     let folder = folder_of(path);
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".cltrace-").suffix(".tmp");
-    // A temporary file is private (0600); the image it becomes is an ordinary file, as
-    // readable as the user's umask lets any new file be.
-    #[cfg(unix)]
-    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    let mut tmp = builder.tempfile_in(folder).map_err(|e| {
-        Error::output(
-            path,
-            format!("cannot create a file in {}: {e}", folder.display()),
-        )
-    })?;
+    let mut tmp = temporary_in(folder).map_err(|e| cannot_create(path, folder, e))?;
     {
         let mut w = BufWriter::new(tmp.as_file_mut());
         fill(&mut w)?;

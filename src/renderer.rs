@@ -5,7 +5,6 @@
 
 use std::sync::atomic::AtomicBool;
 
-use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 use crate::brute::BruteForce;
@@ -19,7 +18,7 @@ use crate::material::{Material, Materials};
 use crate::mesh::Mesh;
 use crate::render::integrator::{self, Accumulation, Emitters, SampleSettings};
 use crate::render::{Frame, Hit, Method, ShadeParams, cpu};
-use crate::report::Timings;
+use crate::report::{Progress, Timings};
 
 /// A method made ready for one mesh (on one device, for the OpenCL methods).
 pub struct Renderer<'d> {
@@ -79,10 +78,16 @@ impl<'d> Renderer<'d> {
     ) -> Result<Self> {
         let (build, sampling) = (&options.build, options.sampling);
         let (flat, mut bvh) = if method.uses_bvh() {
-            let bvh = timings.time("build", || Bvh::build(mesh, build));
-            let stats = bvh.stats();
-            let mut flat = timings.time("layout", || Bin32Bvh::new(bvh, mesh));
-            materials.assign(&mut flat.triangles);
+            let (bvh, stats) = timings.time("build", || {
+                let bvh = Bvh::build(mesh, build);
+                let stats = bvh.stats();
+                (bvh, stats)
+            });
+            let flat = timings.time("layout", || {
+                let mut flat = Bin32Bvh::new(bvh, mesh);
+                materials.assign(&mut flat.triangles);
+                flat
+            });
             (Some(flat), Some(stats))
         } else {
             (None, None)
@@ -99,7 +104,8 @@ impl<'d> Renderer<'d> {
         let (tracer, scene_bytes, emitters) = match (method, flat) {
             (Method::CpuBrute, _) => {
                 let triangles = all();
-                let emitters = Emitters::new(&triangles, &materials.list);
+                let emitters =
+                    timings.time("lights", || Emitters::new(&triangles, &materials.list));
                 let n = triangles.len();
                 (
                     Tracer::CpuBrute(BruteForce { triangles }),
@@ -108,7 +114,8 @@ impl<'d> Renderer<'d> {
                 )
             }
             (Method::CpuBvh, Some(flat)) => {
-                let emitters = Emitters::new(&flat.triangles, &materials.list);
+                let emitters =
+                    timings.time("lights", || Emitters::new(&flat.triangles, &materials.list));
                 let b = bytes(flat.nodes.len(), flat.triangles.len());
                 (Tracer::CpuBvh(flat), b, emitters)
             }
@@ -117,7 +124,8 @@ impl<'d> Renderer<'d> {
                 let program =
                     timings.time("compile", || ClTracer::compile(device, None, sampling))?;
                 let triangles = all();
-                let emitters = Emitters::new(&triangles, &materials.list);
+                let emitters =
+                    timings.time("lights", || Emitters::new(&triangles, &materials.list));
                 let tracer = timings.time("upload", || -> Result<ClTracer> {
                     let mut t = ClTracer::brute(device, &program, &triangles)?;
                     t.set_lights(&materials.list, &emitters)?;
@@ -137,7 +145,8 @@ impl<'d> Renderer<'d> {
                     .unwrap_or_else(|| default_layout(&device.info));
                 let laid = timings.time("layout", || DeviceLayout::new(flat, layout, sah));
                 // After the layout: the compressed one reorders the triangles.
-                let emitters = Emitters::new(&laid.triangles, &materials.list);
+                let emitters =
+                    timings.time("lights", || Emitters::new(&laid.triangles, &materials.list));
                 let program = timings.time("compile", || {
                     ClTracer::compile(device, Some((laid.layout, laid.stack_size)), sampling)
                 })?;
@@ -176,26 +185,24 @@ impl<'d> Renderer<'d> {
     ) -> Result<(Frame, TraceTimes)> {
         let (w, h) = (camera.width, camera.height);
         let pixels = w as u64 * h as u64;
-        let cpu_trace = |tracer: &dyn Fn(Option<&ProgressBar>) -> Frame, long: bool| {
-            let bar = (progress && long).then(|| rows_bar(h as u64, "tracing on the CPU"));
+        let cpu_trace = |tracer: &dyn Fn(&(dyn Fn() + Sync)) -> Frame, long: bool| {
+            let bar = Progress::new(progress && long, "tracing on the CPU", h as u64, "rows");
             let start = std::time::Instant::now();
-            let frame = tracer(bar.as_ref());
-            if let Some(b) = bar {
-                b.finish_and_clear();
-            }
+            let frame = tracer(&|| bar.inc(1));
+            bar.finish();
             let times = TraceTimes {
                 trace_ms: start.elapsed().as_secs_f64() * 1e3,
                 read_back_ms: 0.0,
             };
             (frame, times)
         };
-        Ok(match &mut self.tracer {
+        let traced = match &mut self.tracer {
             Tracer::CpuBrute(t) => cpu_trace(
-                &|bar| cpu::render(t, &camera.pinhole(), w, h, shade, bar),
+                &|row| cpu::render(t, &camera.pinhole(), w, h, shade, Some(row)),
                 pixels * t.triangles.len() as u64 > 1 << 30,
             ),
             Tracer::CpuBvh(t) => cpu_trace(
-                &|bar| cpu::render(t, &camera.pinhole(), w, h, shade, bar),
+                &|row| cpu::render(t, &camera.pinhole(), w, h, shade, Some(row)),
                 pixels > 1 << 24,
             ),
             Tracer::Cl(t) => {
@@ -206,7 +213,10 @@ impl<'d> Renderer<'d> {
                 };
                 (frame, times)
             }
-        })
+        };
+        // Interrupted, the frame misses rows: nothing of it may be written.
+        crate::interrupt::check()?;
+        Ok(traced)
     }
 
     /// Adds samples `samples` of every pixel to `accumulation` (as large as the camera's
@@ -222,14 +232,7 @@ impl<'d> Renderer<'d> {
         stop: &AtomicBool,
         progress: bool,
     ) -> Result<TraceTimes> {
-        let bar = progress.then(|| {
-            ProgressBar::new(samples.len() as u64).with_style(
-                ProgressStyle::with_template(
-                    "sampling [{bar:30}] {pos}/{len} samples, {msg}, {eta} left",
-                )
-                .expect("valid template"),
-            )
-        });
+        let bar = Progress::new(progress, "sampling", samples.len() as u64, "samples");
         let start = std::time::Instant::now();
         let rays_before = accumulation.rays;
         let pinhole = camera.pinhole();
@@ -242,10 +245,8 @@ impl<'d> Renderer<'d> {
                     accumulation,
                     stop,
                     &mut |done, rays| {
-                        if let Some(b) = &bar {
-                            b.set_position(done as u64);
-                            b.set_message(mrays(start, rays));
-                        }
+                        bar.set_message(mrays(start, rays));
+                        bar.set_position(done as u64);
                     },
                 )?;
                 TraceTimes {
@@ -270,10 +271,8 @@ impl<'d> Renderer<'d> {
                         accumulation,
                         stop,
                     );
-                    if let Some(b) = &bar {
-                        b.inc(1);
-                        b.set_message(mrays(start, accumulation.rays - rays_before));
-                    }
+                    bar.set_message(mrays(start, accumulation.rays - rays_before));
+                    bar.inc(1);
                 }
                 TraceTimes {
                     trace_ms: start.elapsed().as_secs_f64() * 1e3,
@@ -281,9 +280,7 @@ impl<'d> Renderer<'d> {
                 }
             }
         };
-        if let Some(b) = bar {
-            b.finish_and_clear();
-        }
+        bar.finish();
         Ok(times)
     }
 
@@ -363,13 +360,4 @@ fn mrays(start: std::time::Instant, rays: u64) -> String {
         "{:.1} Mrays/s",
         rays as f64 / start.elapsed().as_secs_f64() / 1e6
     )
-}
-
-fn rows_bar(rows: u64, message: &'static str) -> ProgressBar {
-    ProgressBar::new(rows)
-        .with_style(
-            ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} rows, {eta} left")
-                .expect("valid template"),
-        )
-        .with_message(message)
 }

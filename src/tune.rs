@@ -144,6 +144,7 @@ pub(crate) fn tune_device(
                 continue;
             }
             renderer.set_work_group(shape)?;
+            crate::interrupt::check()?;
             let median = |kind: RayKind, renderer: &mut Renderer| -> Result<f64> {
                 let mut frame = || -> Result<f64> {
                     Ok(match kind {

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[&[&str]] = &[
     // Pure values: no I/O, no OpenCL, no command line.
     &["error", "geometry"],
-    &["mesh", "camera"],
+    &["mesh", "camera", "interrupt"],
     &["intersect"],
     &["material", "brute", "bvh"],
     &["render", "report"],

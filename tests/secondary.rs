@@ -387,53 +387,6 @@ fn the_same_seed_gives_the_same_bytes() {
     assert_eq!(a.rays, b.rays);
 }
 
-/// Ctrl-C during a long progressive render stops sampling and writes what accumulated.
-#[test]
-fn ctrl_c_writes_what_has_accumulated() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("partial.pfm");
-    let child = cltrace()
-        .args([
-            "render", "--shade", "path", "--spp", "65536", "--width", "64", "--height", "48",
-            "--method", "cl-bvh",
-        ])
-        .arg("-o")
-        .arg(&out)
-        .env(
-            "CLTRACE_DEVICE",
-            std::env::var("CLTRACE_DEVICE").unwrap_or_else(|_| "default".into()),
-        )
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    std::thread::sleep(std::time::Duration::from_secs(4));
-    let status = std::process::Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(status.success());
-    let output = child.wait_with_output().unwrap();
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(
-        output.status.success(),
-        "exit {:?}: {stderr}",
-        output.status
-    );
-    assert!(stderr.contains("stopped early"), "{stderr}");
-    let bytes = std::fs::read(&out).unwrap();
-    let header = b"PF\n64 48\n-1.0\n";
-    assert_eq!(&bytes[..header.len()], header);
-    let floats: Vec<f32> = bytes[header.len()..]
-        .chunks(4)
-        .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
-        .collect();
-    assert_eq!(floats.len(), 64 * 48 * 3);
-    assert!(
-        floats.iter().all(|v| v.is_finite()) && floats.iter().any(|&v| v > 0.0),
-        "the image holds light"
-    );
-}
-
 #[test]
 fn bad_sampling_options_exit_2() {
     for args in [

@@ -12,7 +12,6 @@ pub(crate) use table::{markdown, write_csv, write_json};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 use crate::bvh::Bin32Bvh;
@@ -29,7 +28,7 @@ use crate::material::Materials;
 use crate::mesh::Mesh;
 use crate::render::{Method, Shade, ShadeParams};
 use crate::renderer::{PrepareOptions, Renderer};
-use crate::report::{Timings, Verbosity};
+use crate::report::{Progress, Timings, Verbosity};
 
 /// The kinds of rays of the benchmark protocol.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
@@ -202,8 +201,10 @@ enum Target {
 }
 
 /// Runs the whole matrix and returns its rows (also printed as they come, with
-/// `--verbose`). A progress bar on stderr counts the runs.
-pub(crate) fn run(req: &BenchRequest) -> Result<Vec<BenchRow>> {
+/// `--verbose`), and whether it is complete: an interruption (Ctrl-C) ends it early with
+/// the rows measured so far, or with [`Error::Interrupted`] when there are none. A progress
+/// bar on stderr counts the runs.
+pub(crate) fn run(req: &BenchRequest) -> Result<(Vec<BenchRow>, bool)> {
     req.build.check()?;
     if req.repetitions == 0 {
         return Err(Error::Invalid("--repetitions must be at least 1".into()));
@@ -234,22 +235,36 @@ pub(crate) fn run(req: &BenchRequest) -> Result<Vec<BenchRow>> {
         .sum::<usize>()
         * req.resolutions.len()
         * req.ray_kinds.len();
-    let bar = if req.verbosity.progress() {
-        ProgressBar::new((runs_per_scene * scenes.len()) as u64)
-    } else {
-        ProgressBar::hidden()
-    };
-    bar.set_style(
-        ProgressStyle::with_template("{msg:40} [{bar:30}] {pos}/{len} runs, {elapsed}")
-            .expect("valid template"),
+    let bar = Progress::new(
+        req.verbosity.progress(),
+        "bench",
+        (runs_per_scene * scenes.len()) as u64,
+        "runs",
     );
-
     let mut rows = Vec::new();
-    for scene in &scenes {
+    let ran = run_into(req, &scenes, &targets, &bar, &mut rows);
+    bar.finish();
+    match ran {
+        Ok(()) => Ok((rows, true)),
+        Err(Error::Interrupted) if !rows.is_empty() => Ok((rows, false)),
+        Err(e) => Err(e),
+    }
+}
+
+/// The matrix's runs, each row pushed to `rows` as it is measured.
+fn run_into(
+    req: &BenchRequest,
+    scenes: &[BenchScene],
+    targets: &[Target],
+    bar: &Progress,
+    rows: &mut Vec<BenchRow>,
+) -> Result<()> {
+    for scene in scenes {
         bar.set_message(format!("loading {}", scene.name));
         let start = Instant::now();
         let mesh = scene.source.load()?;
         let load_ms = start.elapsed().as_secs_f64() * 1e3;
+        crate::interrupt::check()?;
         let mut diffuse = std::collections::HashMap::new();
         if req.ray_kinds.contains(&RayKind::Diffuse) {
             bar.set_message(format!("diffuse rays for {}", scene.name));
@@ -261,7 +276,7 @@ pub(crate) fn run(req: &BenchRequest) -> Result<Vec<BenchRow>> {
             }
         }
         for &method in &req.methods {
-            for target in &targets {
+            for target in targets {
                 let device = match (method.uses_opencl(), target) {
                     (true, Target::Device(d)) => Some(d),
                     (false, Target::Host) => None,
@@ -291,6 +306,7 @@ pub(crate) fn run(req: &BenchRequest) -> Result<Vec<BenchRow>> {
                     )?;
                     for &(width, height) in &req.resolutions {
                         for &kind in &req.ray_kinds {
+                            crate::interrupt::check()?;
                             let row = measure(
                                 req,
                                 scene,
@@ -318,8 +334,7 @@ pub(crate) fn run(req: &BenchRequest) -> Result<Vec<BenchRow>> {
             }
         }
     }
-    bar.finish_and_clear();
-    Ok(rows)
+    Ok(())
 }
 
 /// The layouts a method is measured in: every requested one for `cl-bvh`, only the

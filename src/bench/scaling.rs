@@ -143,7 +143,7 @@ pub(crate) fn plot_scaling(rows: &[BenchRow], path: &Path) -> Result<()> {
         root.present().map_err(|e| fail(&e))?;
     }
     let image = image::RgbImage::from_raw(width, height, pixels).expect("buffer matches the size");
-    crate::output::check_folder(path)?;
+    crate::output::check_output(path)?;
     write_atomically(path, |w| {
         image
             .write_to(w, image::ImageFormat::Png)

@@ -79,7 +79,7 @@ pub(crate) fn markdown(rows: &[BenchRow]) -> String {
 
 /// The rows as CSV, one column per field, written atomically.
 pub(crate) fn write_csv(rows: &[BenchRow], path: &Path) -> Result<()> {
-    crate::output::check_folder(path)?;
+    crate::output::check_output(path)?;
     write_atomically(path, |w| {
         let mut csv = csv::Writer::from_writer(w);
         for r in rows {
@@ -91,7 +91,7 @@ pub(crate) fn write_csv(rows: &[BenchRow], path: &Path) -> Result<()> {
 
 /// The rows as a JSON array of objects, written atomically.
 pub(crate) fn write_json(rows: &[BenchRow], path: &Path) -> Result<()> {
-    crate::output::check_folder(path)?;
+    crate::output::check_output(path)?;
     write_atomically(path, |w| {
         serde_json::to_writer_pretty(w, rows).map_err(|e| Error::output(path, e))
     })

@@ -3,10 +3,11 @@
 
 use std::path::PathBuf;
 
+use super::Ending;
 use crate::bench::{self, BenchRequest};
 use crate::error::Result;
-use crate::output::check_folder;
-use crate::report::print_data;
+use crate::output::check_output;
+use crate::report::{print_data, print_message};
 
 /// Everything `cltrace bench` was asked to do.
 #[derive(Clone, Debug)]
@@ -24,22 +25,23 @@ pub struct BenchCommand {
 }
 
 /// Runs the benchmark, prints its table and writes the files asked for. Every output
-/// folder is checked before anything is measured.
-pub fn bench(cmd: &BenchCommand) -> Result<()> {
+/// folder is checked before anything is measured. Interrupted (Ctrl-C), the rows measured
+/// so far are printed and written, and the ending is [`Ending::Partial`].
+pub fn bench(cmd: &BenchCommand) -> Result<Ending> {
     for path in [&cmd.csv, &cmd.json, &cmd.plot].into_iter().flatten() {
-        check_folder(path)?;
+        check_output(path)?;
     }
-    let rows = if cmd.scaling {
-        let rows = bench::run(&bench::scaling_request(&cmd.request))?;
+    let (rows, complete) = if cmd.scaling {
+        let (rows, complete) = bench::run(&bench::scaling_request(&cmd.request))?;
         print_data(&bench::scaling_table(&rows));
         if let Some(plot) = &cmd.plot {
             bench::plot_scaling(&rows, plot)?;
         }
-        rows
+        (rows, complete)
     } else {
-        let rows = bench::run(&cmd.request)?;
+        let (rows, complete) = bench::run(&cmd.request)?;
         print_data(&bench::markdown(&rows));
-        rows
+        (rows, complete)
     };
     if let Some(csv) = &cmd.csv {
         bench::write_csv(&rows, csv)?;
@@ -47,5 +49,14 @@ pub fn bench(cmd: &BenchCommand) -> Result<()> {
     if let Some(json) = &cmd.json {
         bench::write_json(&rows, json)?;
     }
-    Ok(())
+    if complete {
+        return Ok(Ending::Complete);
+    }
+    if cmd.request.verbosity.progress() {
+        print_message(&format!(
+            "interrupted: the {} runs measured are above, the rest were not run",
+            rows.len()
+        ));
+    }
+    Ok(Ending::Partial)
 }

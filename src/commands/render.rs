@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use super::Ending;
 use crate::bvh::BuildOptions;
 use crate::camera::Camera;
 use crate::camera::CameraSettings;
@@ -10,11 +11,12 @@ use crate::error::Error;
 use crate::error::Result;
 use crate::geometry::Aabb;
 use crate::input::scene_file::{RenderSettings, SceneDescription};
+use crate::mesh::Mesh;
 use crate::output;
 use crate::render::integrator::{Accumulation, Light, Lighting, SampleSettings};
-use crate::render::{Frame, Method, Shade, ShadeParams, tone_map};
-use crate::renderer::{PrepareOptions, Renderer};
-use crate::report::{Timings, Verbosity};
+use crate::render::{Frame, Hit, Method, Shade, ShadeParams, tone_map};
+use crate::renderer::{PrepareOptions, Renderer, TraceTimes};
+use crate::report::{Timings, Verbosity, format_ms};
 
 // The render settings' defaults and limits, declared here once: the render applies them
 // where neither the flags nor the scene file give a setting, and the flags' help
@@ -47,10 +49,6 @@ pub const MAX_BOUNCES: u32 = 1024;
 /// framing puts the eye).
 pub const DEFAULT_LIGHT: &str = "sun:-0.4,1,0.6";
 
-/// The stop flag of progressive renders: set (by Ctrl-C, in the binary) to end sampling
-/// early and write what has accumulated.
-pub static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-
 /// Everything `cltrace render` was asked to do.
 #[derive(Clone, Debug, Default)]
 pub struct RenderRequest {
@@ -64,6 +62,8 @@ pub struct RenderRequest {
     pub output: PathBuf,
     /// Where to write the raw hit records, if anywhere.
     pub hits: Option<PathBuf>,
+    /// Where to write a JSON summary of the run, if anywhere ([`RunSummary`]).
+    pub json: Option<PathBuf>,
     /// `--device` (or `CLTRACE_DEVICE`), for OpenCL methods.
     pub device: Option<String>,
     /// How to build the BVH, for BVH methods.
@@ -87,6 +87,62 @@ pub(crate) struct RenderOutcome {
     /// The OpenCL device's name, for OpenCL methods.
     pub(crate) device: Option<String>,
     pub(crate) timings: Timings,
+    /// The summary `--json` writes.
+    pub(crate) summary: RunSummary,
+}
+
+/// The machine-readable summary of one render (`render --json FILE`). Times are in
+/// milliseconds; `stages` add up to `wall_ms`.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct RunSummary {
+    /// cltrace's version.
+    pub version: &'static str,
+    /// The scene or mesh rendered.
+    pub scene: String,
+    /// The method that rendered it (after a `--fallback`, the host method).
+    pub method: String,
+    /// The OpenCL device, for OpenCL methods.
+    pub device: Option<String>,
+    /// The BVH layout of cl-bvh.
+    pub layout: Option<String>,
+    /// The OpenCL work-group shape, across and down.
+    pub work_group: Option<[usize; 2]>,
+    /// Where the layout and work-group came from: `asked for`, `tuning cache`, `the
+    /// device's default`.
+    pub kernels_from: Option<String>,
+    /// Whether the compiled kernels came from the program cache.
+    pub program_cache_hit: Option<bool>,
+    /// Image size in pixels.
+    pub width: u32,
+    /// Image size in pixels.
+    pub height: u32,
+    /// The shade mode.
+    pub shade: String,
+    /// Triangles in the scene.
+    pub triangles: usize,
+    /// Samples per pixel asked for (progressive modes).
+    pub spp: Option<u32>,
+    /// Samples per pixel taken, the mean over the image (fewer than `spp` when interrupted).
+    pub samples_per_pixel: Option<f64>,
+    /// Every ray traced: one camera ray a pixel, then the sampling's rays.
+    pub rays: u64,
+    /// Each stage's time, in the order they ran; `other` is the rest of the wall time.
+    pub stages: Vec<Stage>,
+    /// The run's wall time, from the start of the command to the last file written.
+    pub wall_ms: f64,
+    /// The files written (the image, the hit records), in that order.
+    pub outputs: Vec<PathBuf>,
+    /// False when the render was interrupted and the image holds fewer samples.
+    pub complete: bool,
+}
+
+/// One stage of [`RunSummary::stages`].
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Stage {
+    /// `load`, `build`, `compile`, ...
+    pub name: &'static str,
+    /// Its time in milliseconds.
+    pub ms: f64,
 }
 
 /// Refuses sampling settings out of range before any work is done.
@@ -152,22 +208,61 @@ pub(crate) fn sample_settings(
 }
 
 /// Runs a render request and reports it on stderr: the image written (size, method,
-/// device) and the stage timings.
-pub fn render(req: &RenderRequest) -> Result<()> {
-    let outcome = run(req)?;
+/// device) and the stage timings, which add up to the total. Interrupted (Ctrl-C) once
+/// every pixel has a sample, the image is written with the samples taken and the ending is
+/// [`Ending::Partial`]; before that, nothing is written and the error is
+/// [`Error::Interrupted`].
+pub fn render(req: &RenderRequest) -> Result<Ending> {
+    let start = std::time::Instant::now();
+    if let Some(json) = &req.json {
+        output::check_output(json)?;
+    }
+    let mut outcome = run(req)?;
     let on = outcome
         .device
+        .as_ref()
         .map(|d| format!(" on {d}"))
         .unwrap_or_default();
+    let ending = match outcome.summary.complete {
+        true => Ending::Complete,
+        false => Ending::Partial,
+    };
+    let partial = match (outcome.summary.samples_per_pixel, outcome.summary.spp) {
+        (Some(taken), Some(spp)) if ending == Ending::Partial => {
+            format!(", interrupted: {taken:.1} of {spp} samples per pixel")
+        }
+        _ => String::new(),
+    };
     req.verbosity.say(format!(
-        "wrote {} ({}x{}, {}{on})",
+        "wrote {} ({}x{}, {}{on}{partial})",
         req.output.display(),
         outcome.frame.width,
         outcome.frame.height,
         outcome.method.name(),
     ));
-    req.verbosity.say(outcome.timings.summary());
-    Ok(())
+    let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+    outcome.timings.close(wall_ms);
+    req.verbosity.say(format!(
+        "{}, total {}",
+        outcome.timings.summary(),
+        format_ms(wall_ms)
+    ));
+    if let Some(json) = &req.json {
+        let mut summary = outcome.summary;
+        summary.wall_ms = wall_ms;
+        summary.stages = outcome
+            .timings
+            .stages()
+            .map(|(name, ms)| Stage { name, ms })
+            .collect();
+        let text = serde_json::to_string_pretty(&summary).expect("a summary serialises") + "\n";
+        output::write_atomically(json, |w| {
+            use std::io::Write;
+            w.write_all(text.as_bytes())
+                .map_err(|e| Error::output(json, e))
+        })?;
+    }
+    Ok(ending)
 }
 
 /// Runs a render request end to end. Every check that needs no work (output format and
@@ -211,7 +306,22 @@ fn render_with(
     output::image_format(&req.output)?;
     req.build.check()?;
     if let Some(hits) = &req.hits {
-        output::check_folder(hits)?;
+        output::check_output(hits)?;
+    }
+    for (a, b) in [
+        (Some(&req.output), req.hits.as_ref()),
+        (Some(&req.output), req.json.as_ref()),
+        (req.hits.as_ref(), req.json.as_ref()),
+    ] {
+        if let (Some(a), Some(b)) = (a, b)
+            && a == b
+            && a != std::path::Path::new("/dev/null")
+        {
+            return Err(Error::Invalid(format!(
+                "{} is named for two outputs: give each its own file",
+                a.display()
+            )));
+        }
     }
     crate::camera::check_settings(&camera_settings)?;
     let selector = DeviceSelector::from_flag_or_env(req.device.as_deref())?;
@@ -224,8 +334,11 @@ fn render_with(
             .uses_opencl()
             .then(|| s.spawn(|| ClDevice::select(&selector)));
         let mesh = timings.time("load", || scene.mesh.load_with_materials());
+        // What opening the device took beyond the load is a stage of its own.
         let device = match opening {
-            Some(handle) => Some(handle.join().expect("opening a device does not panic")?),
+            Some(handle) => Some(timings.time("open", || {
+                handle.join().expect("opening a device does not panic")
+            })?),
             None => None,
         };
         Ok::<_, crate::Error>((device, mesh?))
@@ -238,6 +351,7 @@ fn render_with(
     if let Some(warning) = warning {
         v.say(format!("warning: {warning}"));
     }
+    crate::interrupt::check()?;
     if let Some(d) = &device {
         v.detail(format!("device: {}", d.info));
     }
@@ -286,20 +400,41 @@ fn render_with(
         device.as_ref(),
         &mut timings,
     )?;
-    if let Some((layout, [across, down])) = renderer.kernels() {
-        let what = match layout {
-            None => "brute force".to_string(),
-            Some(l) if render.layout.is_some() => format!("{} layout (asked for)", l.name()),
-            Some(l) if tuned_layout == Some(l) => format!("{} layout (tuning cache)", l.name()),
-            Some(l) => format!("{} layout (the device's default)", l.name()),
+    crate::interrupt::check()?;
+    let mut summary = RunSummary {
+        version: env!("CARGO_PKG_VERSION"),
+        scene: scene.mesh.name(),
+        method: method.name().to_string(),
+        device: device.as_ref().map(|d| d.info.name.clone()),
+        width: camera.width,
+        height: camera.height,
+        shade: shade.shade.name().to_string(),
+        triangles: mesh.triangle_count(),
+        complete: true,
+        ..RunSummary::default()
+    };
+    if let Some((layout, work_group)) = renderer.kernels() {
+        let from = match layout {
+            None => None,
+            Some(_) if render.layout.is_some() => Some("asked for"),
+            Some(l) if tuned_layout == Some(l) => Some("tuning cache"),
+            Some(_) => Some("the device's default"),
+        };
+        let what = match (layout, from) {
+            (Some(l), Some(from)) => format!("{} layout ({from})", l.name()),
+            _ => "brute force".to_string(),
         };
         let cache = match (&req.tune_cache, tuned_layout) {
             (Some(path), Some(_)) => format!(", tuned in {}", path.display()),
             _ => String::new(),
         };
+        let [across, down] = work_group;
         v.detail(format!(
             "kernels: {what}, {across}x{down} work-groups{cache}"
         ));
+        summary.layout = layout.map(|l| l.name().to_string());
+        summary.work_group = Some(work_group);
+        summary.kernels_from = from.map(String::from);
     }
     if let Some(s) = &renderer.bvh {
         v.detail(format!(
@@ -312,45 +447,62 @@ fn render_with(
             rayon::current_num_threads()
         ));
     }
-    let (mut frame, times) = renderer.render(&camera, &shade, v.progress())?;
-    let (traced, read_back) = if method.uses_opencl() {
-        ("kernel", "read-back")
-    } else {
-        ("trace", "read-back")
+    let (traced, read_back) = match method.uses_opencl() {
+        true => ("kernel", Some("read-back")),
+        false => ("trace", None),
     };
-    timings.add(traced, times.trace_ms);
-    if method.uses_opencl() {
-        timings.add(read_back, times.read_back_ms);
-    }
+    // Device stages are timed on the device; what the host spent around them (launches,
+    // waits, a driver's compile at the first launch) is the `launch` stage.
+    let add_times = |timings: &mut Timings, stage, wall_ms: f64, times: &TraceTimes| {
+        timings.add(stage, times.trace_ms);
+        if let Some(read_back) = read_back {
+            timings.add(read_back, times.read_back_ms);
+            timings.add(
+                "launch",
+                (wall_ms - times.trace_ms - times.read_back_ms).max(0.0),
+            );
+        }
+    };
+    let start = std::time::Instant::now();
+    let (mut frame, times) = renderer.render(&camera, &shade, v.progress())?;
+    add_times(&mut timings, traced, elapsed_ms(start), &times);
+    summary.rays = camera.width as u64 * camera.height as u64;
     if let Some((settings, spp)) = sampling {
         let mut accumulation = Accumulation::new(camera.width, camera.height);
+        let start = std::time::Instant::now();
         let times = renderer.render_samples(
             &camera,
             &settings,
             0..spp,
             &mut accumulation,
-            &STOP,
+            crate::interrupt::flag(),
             v.progress(),
         )?;
-        timings.add("samples", times.trace_ms);
-        if method.uses_opencl() {
-            timings.add(read_back, times.read_back_ms);
-        }
-        let taken = accumulation.pixels.iter().map(|p| p[3] as u64).sum::<u64>() as f64
-            / accumulation.pixels.len() as f64;
+        add_times(&mut timings, "samples", elapsed_ms(start), &times);
+        let counts = accumulation.pixels.iter().map(|p| p[3] as u64);
+        let taken = counts.clone().sum::<u64>() as f64 / accumulation.pixels.len() as f64;
         if taken < spp as f64 {
-            v.say(format!(
-                "stopped early: {taken:.1} of {spp} samples per pixel were taken; writing those"
-            ));
+            // Interrupted. An image where some pixels have no sample would show holes as
+            // black: nothing is written until every pixel has one.
+            if counts.min().unwrap_or(0) == 0 {
+                return Err(Error::Interrupted);
+            }
+            summary.complete = false;
         }
         v.detail(format!(
             "samples: {taken:.1} per pixel, {:.2} million rays, {:.1} Mrays/s",
             accumulation.rays as f64 / 1e6,
             accumulation.rays as f64 / times.trace_ms.max(1e-9) / 1e3
         ));
-        let radiance = accumulation.radiance();
+        summary.spp = Some(spp);
+        summary.samples_per_pixel = Some(taken);
+        summary.rays += accumulation.rays;
+        let radiance = timings.time("tone-map", || accumulation.radiance());
         frame.colors = tone_map(&radiance, shade.shade);
         frame.radiance = Some(radiance);
+    }
+    if let Some(warning) = unlit_warning(&frame, &mesh, &camera, shade.shade) {
+        v.say(format!("warning: {warning}"));
     }
 
     timings.time("write", || -> Result<()> {
@@ -360,10 +512,74 @@ fn render_with(
         }
         Ok(())
     })?;
+    summary.outputs = std::iter::once(&req.output)
+        .chain(&req.hits)
+        .cloned()
+        .collect();
     Ok(RenderOutcome {
         frame,
         method,
         device: device.map(|d| d.info.name),
         timings,
+        summary,
     })
+}
+
+fn elapsed_ms(start: std::time::Instant) -> f64 {
+    start.elapsed().as_secs_f64() * 1e3
+}
+
+/// A warning when the image shows nothing: every camera ray missed, or (in the modes that
+/// gather light) no light reached any pixel. It says what the camera saw, since the usual
+/// cause is a camera placed outside a closed room, inside a closed mesh, or facing away.
+fn unlit_warning(frame: &Frame, mesh: &Mesh, camera: &Camera, shade: Shade) -> Option<String> {
+    let hits: Vec<usize> = (0..frame.hits.len())
+        .filter(|&i| frame.hits[i].prim != Hit::NONE.prim)
+        .collect();
+    let place = format!(
+        "the camera at {:?} looking at {:?}",
+        camera.eye.to_array(),
+        camera.look_at.to_array()
+    );
+    if hits.is_empty() {
+        let bounds = mesh.bounds();
+        return Some(format!(
+            "the image is empty: every camera ray missed the scene (its bounds are {:?} to \
+             {:?}) from {place}; set --eye and --look-at",
+            bounds.min.to_array(),
+            bounds.max.to_array()
+        ));
+    }
+    let lit = match &frame.radiance {
+        Some(radiance) => radiance.iter().any(|p| p.iter().any(|&c| c > 0.0)),
+        None => true,
+    };
+    if lit {
+        return None;
+    }
+    // Which side of the surfaces the camera sees: the back of every face seen means it is
+    // outside a room whose faces point inwards, or inside a mesh whose faces point out.
+    let pinhole = camera.pinhole();
+    let w = camera.width as usize;
+    let back = hits
+        .iter()
+        .filter(|&&i| {
+            let [a, b, c] = mesh.corners(frame.hits[i].prim as usize);
+            let ray = pinhole.ray((i % w) as u32, (i / w) as u32);
+            (b - a).cross(c - a).dot(ray.dir) > 0.0
+        })
+        .count();
+    let nearest = hits
+        .iter()
+        .map(|&i| frame.hits[i].t)
+        .fold(f32::INFINITY, f32::min);
+    Some(format!(
+        "no pixel is lit ({}): {:.0}% of the camera rays hit the scene, {:.0}% of those on the \
+         back of a face, the nearest {nearest} away, from {place}; no light reaches what the \
+         camera sees (is it outside a closed room, or inside a closed mesh?): set --eye and \
+         --look-at",
+        shade.name(),
+        100.0 * hits.len() as f64 / frame.hits.len() as f64,
+        100.0 * back as f64 / hits.len() as f64,
+    ))
 }

@@ -28,12 +28,19 @@ pub struct TuneRequest {
 
 /// Tunes every chosen device, printing each measured combination, and saves the best of
 /// each in the cache. The measurements themselves never read the cache: every layout and
-/// work-group shape is set explicitly.
+/// work-group shape is set explicitly. Interrupted (Ctrl-C), it ends with
+/// [`Error::Interrupted`] and leaves the cache as it was: a half-tuned device's best is
+/// not known.
 pub fn tune(req: &TuneRequest) -> Result<()> {
     let verbosity = req.verbosity;
     let path = req.cache.as_ref().ok_or_else(|| {
         Error::Invalid("no cache location: set CLTRACE_TUNE_CACHE or HOME".into())
     })?;
+    // The cache must be writable before an hour of measuring, not after.
+    if let Some(folder) = path.parent().filter(|f| !f.as_os_str().is_empty()) {
+        std::fs::create_dir_all(folder).map_err(|e| Error::output(path, e))?;
+    }
+    crate::output::check_output(path)?;
     let scene = SceneDescription::named(req.scene.as_deref())?;
     let mesh = scene.mesh.load()?;
     let all = list_devices()?;

@@ -4,7 +4,6 @@
 
 use std::time::Instant;
 
-use indicatif::{ProgressBar, ProgressStyle};
 use ocl::enums::ProfilingInfo;
 use ocl::prm::Float4;
 
@@ -17,6 +16,7 @@ use crate::intersect::Triangle;
 use crate::material::Material;
 use crate::render::integrator::{Accumulation, Emitters, Light, Lighting, SampleSettings};
 use crate::render::{Frame, Hit, ShadeParams};
+use crate::report::Progress;
 
 /// Default bound on one kernel launch, in milliseconds of device time.
 pub(crate) const LAUNCH_TARGET_MS: f64 = 100.0;
@@ -689,9 +689,11 @@ impl<'d> ClTracer<'d> {
         let local = self.local;
         let mut frame = Frame::new(width, height);
         let mut times = DeviceTimes::default();
-        let mut bar: Option<ProgressBar> = None;
+        let mut bar: Option<Progress> = None;
         let mut y0 = 0usize;
         while y0 < h {
+            // Interrupted, the frame would miss rows: stop at this band, with the error.
+            crate::interrupt::check()?;
             let rows = self.bands.next_rows(w, h - y0).min(band_capacity);
             // Work-items past the band (the global size is rounded up) return at once.
             band.row0 = y0 as u32;
@@ -718,14 +720,8 @@ impl<'d> ClTracer<'d> {
                 let remaining_ms =
                     (h - y0) as f64 * w as f64 / self.bands.rate.unwrap_or(f64::INFINITY);
                 if remaining_ms > 1000.0 {
-                    let b = ProgressBar::new(h as u64).with_style(
-                        ProgressStyle::with_template(
-                            "{msg} [{bar:30}] {pos}/{len} rows, {eta} left",
-                        )
-                        .expect("valid template"),
-                    );
-                    b.set_message(format!("tracing on {}", device.info.name));
-                    bar = Some(b);
+                    let what = format!("tracing on {}", device.info.name);
+                    bar = Some(Progress::new(true, what, h as u64, "rows"));
                 }
             }
             if let Some(b) = &bar {
@@ -733,7 +729,7 @@ impl<'d> ClTracer<'d> {
             }
         }
         if let Some(b) = bar {
-            b.finish_and_clear();
+            b.finish();
         }
         self.scene.check_status(device)?;
         Ok((frame, times))

@@ -28,8 +28,8 @@ Examples:
   cltrace render bunny.obj --shade ao --ao-samples 32
   cltrace devices                                 list every OpenCL platform and device
 
-Exit status: 0 on success, 2 for bad input (mesh, scene, camera, options), 1 for device
-or output failures.";
+Exit status: 0 on success, 1 for device or output failures, 2 for bad input (mesh, scene,
+camera, options), 3 for a partial result after Ctrl-C, 130 for Ctrl-C with nothing written.";
 
 #[derive(Parser)]
 #[command(
@@ -63,19 +63,24 @@ pub enum Command {
 }
 
 /// The subcommand the command line asks for. Help and version are printed to stdout (and
-/// the process ends) as usual; a mistake on the command line is one line on stderr and
-/// exit status 2, like any other bad input.
+/// the process ends) as usual; a mistake on the command line is clap's message on stderr
+/// (the error, its tips such as "a similar argument exists", the possible values) without
+/// the usage block, and exit status 2, like any other bad input.
 pub fn parse() -> Result<Command, ExitCode> {
     match Cli::try_parse() {
         Ok(cli) => Ok(cli.command),
         Err(e) if !e.use_stderr() => e.exit(),
         Err(e) => {
             let text = e.render().to_string();
-            let first = text
+            let kept: Vec<&str> = text
                 .lines()
-                .find(|l| !l.trim().is_empty())
-                .unwrap_or("error: invalid arguments");
-            cltrace::report::print_message(&format!("{} (see --help)", first.trim_end()));
+                .filter(|l| !l.trim().is_empty() && !l.starts_with("Usage:"))
+                .map(str::trim_end)
+                .collect();
+            match kept.is_empty() {
+                true => cltrace::report::print_message("error: invalid arguments (see --help)"),
+                false => cltrace::report::print_message(&kept.join("\n")),
+            }
             Err(ExitCode::from(2))
         }
     }

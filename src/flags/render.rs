@@ -43,6 +43,11 @@ pub struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     hits: Option<PathBuf>,
 
+    /// Also write a JSON summary of the run here: version, device, layout, work-group,
+    /// samples, rays, every stage's time, wall time, the files written
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+
     #[command(flatten)]
     build: BuildArgs,
 
@@ -161,6 +166,7 @@ impl RenderArgs {
             render: self.settings.into(),
             output: self.output,
             hits: self.hits,
+            json: self.json,
             device: self.device,
             build: self.build.options(),
             fallback_to_cpu: self.fallback == Some(Fallback::Cpu),
@@ -243,7 +249,7 @@ mod help {
             .join(", ");
         format!(
             "Samples per pixel for ao, shadow and path, 1 to {MAX_SPP} {}; Ctrl-C stops early \
-             and writes what accumulated",
+             and, once every pixel has a sample, writes them (exit status 3)",
             or_scene(defaults)
         )
     }

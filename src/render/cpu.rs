@@ -1,7 +1,6 @@
 //! Primary-ray frames on the host, rayon over rows, through any [`ClosestHit`] tracer: the
 //! reference the OpenCL kernels' frames are compared with pixel by pixel.
 
-use indicatif::ProgressBar;
 use rayon::prelude::*;
 
 use super::shade::BACKGROUND;
@@ -10,14 +9,16 @@ use crate::camera::Pinhole;
 use crate::geometry::Ray;
 use crate::intersect::ClosestHit;
 
-/// Traces one primary ray per pixel. `progress`, if given, advances by one per row.
+/// Traces one primary ray per pixel. `on_row`, if given, is called after each row. Once
+/// an interruption is asked for ([`crate::interrupt`]) the rows not yet begun are left
+/// empty, for the caller to notice and discard the frame.
 pub fn render(
     tracer: &impl ClosestHit,
     camera: &Pinhole,
     width: u32,
     height: u32,
     shade: &ShadeParams,
-    progress: Option<&ProgressBar>,
+    on_row: Option<&(dyn Fn() + Sync)>,
 ) -> Frame {
     let mut frame = Frame::new(width, height);
     let w = width as usize;
@@ -27,12 +28,15 @@ pub fn render(
         .zip(frame.colors.par_chunks_mut(w))
         .enumerate()
         .for_each(|(y, (hits, colors))| {
+            if crate::interrupt::requested() {
+                return;
+            }
             for x in 0..w {
                 let ray = camera.ray(x as u32, y as u32);
                 (hits[x], colors[x]) = pixel(tracer, &ray, shade);
             }
-            if let Some(p) = progress {
-                p.inc(1);
+            if let Some(f) = on_row {
+                f();
             }
         });
     frame
