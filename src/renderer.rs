@@ -293,6 +293,15 @@ impl<'d> Renderer<'d> {
         }
     }
 
+    /// What the program cache did for the OpenCL kernels; `None` for the host methods or
+    /// without a cache.
+    pub(crate) fn program_cache(&self) -> Option<&crate::device::CacheUse> {
+        match &self.tracer {
+            Tracer::Cl(t) => t.program_cache(),
+            _ => None,
+        }
+    }
+
     /// Sets the OpenCL kernels' work-group shape (ignored by the host methods).
     pub(crate) fn set_work_group(&mut self, shape: [usize; 2]) -> Result<()> {
         match &mut self.tracer {

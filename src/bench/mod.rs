@@ -197,7 +197,7 @@ struct BenchScene {
 /// Where a method runs: the host, or an OpenCL device.
 enum Target {
     Host,
-    Device(ClDevice),
+    Device(Box<ClDevice>),
 }
 
 /// Runs the whole matrix and returns its rows (also printed as they come, with
@@ -278,7 +278,7 @@ fn run_into(
         for &method in &req.methods {
             for target in targets {
                 let device = match (method.uses_opencl(), target) {
-                    (true, Target::Device(d)) => Some(d),
+                    (true, Target::Device(d)) => Some(&**d),
                     (false, Target::Host) => None,
                     _ => continue,
                 };
@@ -673,7 +673,7 @@ fn targets(req: &BenchRequest) -> Result<Vec<Target>> {
             )));
         }
         for info in chosen {
-            targets.push(Target::Device(ClDevice::open(info)?));
+            targets.push(Target::Device(Box::new(ClDevice::open(info)?)));
         }
     }
     Ok(targets)

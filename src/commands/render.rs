@@ -75,6 +75,9 @@ pub struct RenderRequest {
     /// The tuning cache to read the device's layout and work-group from (`cltrace tune`
     /// writes it); `None` reads none.
     pub tune_cache: Option<PathBuf>,
+    /// The folder compiled kernels are kept in between runs
+    /// ([`crate::device::program_cache_folder`]); `None` compiles every time.
+    pub program_cache: Option<PathBuf>,
     /// How much goes to stderr: the summary and stage timings, details with `--verbose`.
     pub verbosity: Verbosity,
 }
@@ -336,9 +339,15 @@ fn render_with(
         let mesh = timings.time("load", || scene.mesh.load_with_materials());
         // What opening the device took beyond the load is a stage of its own.
         let device = match opening {
-            Some(handle) => Some(timings.time("open", || {
-                handle.join().expect("opening a device does not panic")
-            })?),
+            Some(handle) => {
+                let mut device = timings.time("open", || {
+                    handle.join().expect("opening a device does not panic")
+                })?;
+                if let Some(folder) = &req.program_cache {
+                    device.use_program_cache(folder.clone());
+                }
+                Some(device)
+            }
             None => None,
         };
         Ok::<_, crate::Error>((device, mesh?))
@@ -435,6 +444,10 @@ fn render_with(
         summary.layout = layout.map(|l| l.name().to_string());
         summary.work_group = Some(work_group);
         summary.kernels_from = from.map(String::from);
+    }
+    if let Some(cache) = renderer.program_cache() {
+        v.detail(cache.describe());
+        summary.program_cache_hit = Some(cache.hit());
     }
     if let Some(s) = &renderer.bvh {
         v.detail(format!(

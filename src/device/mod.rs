@@ -3,13 +3,16 @@
 
 mod pitched;
 mod program;
+mod program_cache;
 pub mod tracer;
 
 pub(crate) use pitched::PitchedBuffer;
 pub use program::{Constant, Program, shared_constants};
+pub use program_cache::{CacheUse, default_folder as program_cache_folder};
 pub use tracer::{ClTracer, Kernel};
 
 use std::fmt;
+use std::path::PathBuf;
 use std::str::FromStr;
 
 use ocl::core::{DeviceInfo as Info, DeviceInfoResult as R, DeviceType};
@@ -337,6 +340,8 @@ pub struct ClDevice {
     pub(crate) context: ocl::Context,
     /// The in-order, profiling queue every command of this device goes to.
     pub queue: ocl::Queue,
+    /// Where compiled tracing programs are kept between runs; `None` compiles every time.
+    pub(crate) program_cache: Option<program_cache::ProgramCache>,
 }
 
 impl ClDevice {
@@ -369,7 +374,14 @@ impl ClDevice {
             info,
             context,
             queue,
+            program_cache: None,
         })
+    }
+
+    /// Keeps compiled tracing programs in `folder` between runs (see
+    /// [`program_cache_folder`]), so that a second run loads them instead of compiling.
+    pub fn use_program_cache(&mut self, folder: PathBuf) {
+        self.program_cache = Some(program_cache::ProgramCache::new(folder));
     }
 
     /// Wraps an OpenCL failure during `doing` into a one-line error, naming running out of

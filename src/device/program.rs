@@ -12,7 +12,7 @@ use std::ffi::CString;
 
 use ocl::core::ClDeviceIdPtr;
 
-use super::{ClDevice, first_line};
+use super::{CacheUse, ClDevice, first_line};
 use crate::bvh::Layout;
 use crate::error::{Error, Result};
 
@@ -210,6 +210,7 @@ pub struct Program {
     program: ocl::Program,
     layout: Option<Layout>,
     sampling: bool,
+    cache: Option<CacheUse>,
 }
 
 impl Program {
@@ -226,6 +227,11 @@ impl Program {
     /// The OpenCL program.
     pub fn ocl(&self) -> &ocl::Program {
         &self.program
+    }
+
+    /// What the program cache did for it; `None` on a device without one.
+    pub fn cache(&self) -> Option<&CacheUse> {
+        self.cache.as_ref()
     }
 }
 
@@ -256,12 +262,84 @@ impl ClDevice {
         };
         let options = self.build_options(&defines, extra_options);
         let source = program_source(&program_files(layout, sampling));
+        let Some(cache) = &self.program_cache else {
+            let program = self.build_source(&label, &source, &options)?;
+            return Ok(Program {
+                program,
+                layout,
+                sampling,
+                cache: None,
+            });
+        };
+        let entry = cache.entry(&self.info, &options, &source);
+        let unusable = match entry.load() {
+            Ok(Some(binary)) => match self.build_binary(&binary, &options) {
+                Ok(program) => {
+                    return Ok(Program {
+                        program,
+                        layout,
+                        sampling,
+                        cache: Some(CacheUse::Hit(entry.path)),
+                    });
+                }
+                Err(why) => Some(why),
+            },
+            Ok(None) => None,
+            Err(why) => Some(why),
+        };
         let program = self.build_source(&label, &source, &options)?;
+        let stored = self.binary_of(&program).and_then(|b| entry.store(&b));
+        let cache = match (stored, unusable) {
+            (Err(why), _) => CacheUse::NotStored(why),
+            (Ok(()), Some(why)) => CacheUse::Replaced(entry.path, why),
+            (Ok(()), None) => CacheUse::Stored(entry.path),
+        };
         Ok(Program {
             program,
             layout,
             sampling,
+            cache: Some(cache),
         })
+    }
+
+    /// A program from a binary this device compiled before; `Err` with the reason when
+    /// the driver refuses it (a driver update it did not announce, a damaged binary).
+    fn build_binary(&self, binary: &[u8], options: &str) -> Result<ocl::Program, String> {
+        // By value: ocl-core passes the slice to OpenCL as an array of `cl_device_id`, so a
+        // slice of references would hand it pointers to the wrappers (a driver crash).
+        let device: ocl::core::DeviceId = *self.info.device.as_core();
+        let program = ocl::core::create_program_with_binary(&self.context, &[device], &[binary])
+            .map_err(|e| format!("the driver refused it: {}", first_line(&e.to_string())))?;
+        let options = CString::new(options).expect("build options contain no NUL");
+        let status = unsafe {
+            ocl::core::ffi::clBuildProgram(
+                program.as_ptr(),
+                1,
+                &device.as_ptr(),
+                options.as_ptr(),
+                None,
+                std::ptr::null_mut(),
+            )
+        };
+        match status {
+            0 => Ok(ocl::Program::from(program)),
+            status => Err(format!("the driver refused it (OpenCL status {status})")),
+        }
+    }
+
+    /// The device binary of a built program, to keep in the cache.
+    fn binary_of(&self, program: &ocl::Program) -> Result<Vec<u8>, String> {
+        match ocl::core::get_program_info(program, ocl::core::ProgramInfo::Binaries) {
+            Ok(ocl::core::ProgramInfoResult::Binaries(mut binaries)) if binaries.len() == 1 => {
+                let binary = binaries.remove(0);
+                match binary.is_empty() {
+                    true => Err("the driver gives no binary".into()),
+                    false => Ok(binary),
+                }
+            }
+            Ok(_) => Err("the driver gives no binary".into()),
+            Err(e) => Err(format!("no binary: {}", first_line(&e.to_string()))),
+        }
     }
 
     /// Compiles `probe.cl`, whose kernels report the shared structs' layout and the shared

@@ -371,6 +371,11 @@ impl<'d> ClTracer<'d> {
         Self::with_nodes(device, program, &layout.nodes, &layout.triangles)
     }
 
+    /// What the program cache did for this tracer's program; `None` without a cache.
+    pub fn program_cache(&self) -> Option<&super::CacheUse> {
+        self.program.cache()
+    }
+
     /// The BVH's node layout, `None` for brute force.
     pub fn layout(&self) -> Option<Layout> {
         self.program.layout()

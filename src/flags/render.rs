@@ -171,6 +171,7 @@ impl RenderArgs {
             build: self.build.options(),
             fallback_to_cpu: self.fallback == Some(Fallback::Cpu),
             tune_cache: cltrace::tune::cache_path(),
+            program_cache: cltrace::device::program_cache_folder(),
             verbosity: Verbosity::from_flags(self.quiet, self.verbose),
         }
     }
