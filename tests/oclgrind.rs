@@ -1,7 +1,8 @@
 //! Every kernel under Oclgrind, an OpenCL device simulator that checks each memory access
 //! (and, with `--data-races`, each race): the brute-force and BVH programs of every layout,
 //! the primary-ray kernel and each progressive shade mode, and the ray-buffer kernel, on a
-//! tiny image. Any diagnostic fails the test. Skipped with a notice where `oclgrind` is
+//! tiny image, and the probe kernels (through this test binary's own layout tests). Any
+//! diagnostic fails the test. Skipped with a notice where `oclgrind` is
 //! not installed, except in CI (`CI` set), which installs it.
 
 use crate::common::command::{cltrace, run, text, wrapped};
@@ -102,4 +103,36 @@ fn every_kernel_runs_clean_under_oclgrind() {
         "Oclgrind's diagnostics:\n{}",
         found.join("\n")
     );
+}
+
+/// The probe kernels of cl/probe.cl, which report the shared structs' layout and the
+/// shared constants: this test binary runs its own layout tests under Oclgrind, where the
+/// simulator is the only OpenCL device.
+#[test]
+fn the_probe_kernels_run_clean_under_oclgrind() {
+    let Some(oclgrind) = oclgrind() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("oclgrind.log");
+    let tests = [
+        "layout::device_structs_match_the_rust_structs",
+        "layout::device_constants_match_the_rust_constants",
+    ];
+    let out = std::process::Command::new(&oclgrind)
+        .args(["--check-api", "--data-races", "--log"])
+        .arg(&log)
+        .arg(std::env::current_exe().unwrap())
+        .args(tests)
+        .args(["--exact", "--test-threads", "1"])
+        // Only the simulator's device is named so: the child cannot run elsewhere.
+        .env("CLTRACE_DEVICE", "Oclgrind")
+        // The child checks the probe on the one device it sees; which implementations CI
+        // must have is this run's concern, not the child's.
+        .env_remove("CI")
+        .output()
+        .unwrap();
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
+    assert!(stdout.contains("2 passed"), "{stdout}");
+    let log = std::fs::read_to_string(&log).unwrap_or_default();
+    assert!(log.trim().is_empty(), "Oclgrind's diagnostics:\n{log}");
 }
