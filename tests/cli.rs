@@ -906,3 +906,130 @@ fn bvh_reports_every_layout() {
     assert!(wide8.1 < bin32.1 && cwbvh.1 < bin32.1, "{report}");
     assert!(cwbvh.2 < wide8.2 && cwbvh.2 < bin32.2, "{report}");
 }
+
+/// No value of any render flag makes the binary panic: each flag gets the values that
+/// break naive parsers (empty, NaN, infinities, overflow, fractions, hex, other digits,
+/// wrong arity, non-finite vectors), one flag at a time on a tiny image, and every run
+/// renders or refuses with one `error:` line and a documented status.
+#[test]
+fn nasty_flag_values_never_panic() {
+    let w = Work::new();
+    let quad = w.quad();
+    let png = w.out("out.png");
+    let numbers = [
+        "",
+        " ",
+        "nan",
+        "NaN",
+        "inf",
+        "-inf",
+        "1e39",
+        "-1e39",
+        "-0",
+        "0",
+        "-1",
+        "1.5",
+        "0x10",
+        "\u{0661}",
+        "4294967296",
+        "18446744073709551616",
+        "9".repeat(400).leak(),
+    ];
+    let vectors = [
+        "",
+        "1,2",
+        "1,2,3,4",
+        "nan,0,1",
+        "inf,0,0",
+        "0,-inf,0",
+        "1e39,0,0",
+        "1e-45,0,0",
+        ",,",
+        "a,b,c",
+        "1;2;3",
+        "0,0,0",
+    ];
+    let names = [
+        "",
+        "?",
+        "-",
+        "all",
+        "0:99",
+        "99:0",
+        "\u{1F600}",
+        "cl-bvh,cpu-bvh",
+    ];
+    let table: Vec<(&str, Vec<&str>)> = vec![
+        ("--width", numbers.to_vec()),
+        ("--height", numbers.to_vec()),
+        ("--fov", numbers.to_vec()),
+        ("--spp", numbers.to_vec()),
+        ("--seed", numbers.to_vec()),
+        ("--ao-samples", numbers.to_vec()),
+        ("--ao-distance", numbers.to_vec()),
+        ("--max-bounces", numbers.to_vec()),
+        ("--bins", numbers.to_vec()),
+        ("--max-leaf-size", numbers.to_vec()),
+        ("--optimize", numbers.to_vec()),
+        ("--eye", vectors.to_vec()),
+        ("--look-at", vectors.to_vec()),
+        ("--up", vectors.to_vec()),
+        (
+            "--light",
+            [
+                &vectors[..],
+                &[
+                    "sun:",
+                    "point:nan,0,0",
+                    "sun:0,0,0",
+                    "sun:inf,1,1",
+                    "lamp:1,2,3",
+                ],
+            ]
+            .concat(),
+        ),
+        ("--method", names.to_vec()),
+        ("--shade", names.to_vec()),
+        ("--layout", names.to_vec()),
+        ("--builder", names.to_vec()),
+        ("--device", names.to_vec()),
+        ("--fallback", names.to_vec()),
+    ];
+    let mut problems = Vec::new();
+    for (flag, values) in &table {
+        for value in values {
+            // Small sizes unless the size is what is tried; the sampling flags with a
+            // progressive mode, cheap enough at any accepted value.
+            let mut args = unsized_args(&quad, &png, "cpu-bvh");
+            args.retain(|a| a != "--method" && a != "cpu-bvh");
+            if *flag != "--method" {
+                args.extend(["--method".into(), "cpu-bvh".into()]);
+            }
+            for (size, small) in [("--width", "8"), ("--height", "6")] {
+                if flag != &size {
+                    args.extend([size.into(), small.into()]);
+                }
+            }
+            if ["--spp", "--ao-samples", "--ao-distance", "--seed"].contains(flag) {
+                args.extend(["--shade", "ao", "--ao-samples", "1"].map(String::from));
+            }
+            if ["--max-bounces", "--light"].contains(flag) {
+                let shade = if *flag == "--light" { "shadow" } else { "path" };
+                args.extend(["--shade".into(), shade.into(), "--spp".into(), "1".into()]);
+            }
+            args.push(format!("{flag}={value}"));
+            let out = run(cltrace(&w.input, &args));
+            let stderr = text(&out.stderr);
+            let code = out.status.code();
+            let ok = match code {
+                Some(0) => true,
+                Some(1 | 2) => stderr.starts_with("error: "),
+                _ => false,
+            };
+            if !ok || stderr.contains("panicked") {
+                problems.push(format!("{flag}={value:?}: exit {code:?}: {stderr}"));
+            }
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
