@@ -233,10 +233,14 @@ fn render_with(
     let crate::input::MeshFile {
         mesh,
         materials,
-        warning,
+        warnings,
+        notes,
     } = mesh;
-    if let Some(warning) = warning {
+    for warning in warnings {
         v.say(format!("warning: {warning}"));
+    }
+    for note in notes {
+        v.detail(format!("note: {note}"));
     }
     if let Some(d) = &device {
         v.detail(format!("device: {}", d.info));

@@ -63,7 +63,8 @@ impl MeshSource {
                 Ok(crate::input::MeshFile {
                     mesh,
                     materials,
-                    warning: None,
+                    warnings: Vec::new(),
+                    notes: Vec::new(),
                 })
             }
         }
