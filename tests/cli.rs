@@ -803,6 +803,32 @@ fn a_missing_mtl_file_was_not_named_in_its_warning() {
     );
 }
 
+/// Regression (issue 15): a scene file's bad `light` was an error without the file and
+/// line (it was checked after the file was read); it is at its line like any bad value.
+#[test]
+fn a_bad_light_in_a_scene_file_had_no_line() {
+    let w = Work::new();
+    w.quad();
+    for light in ["sun:1,2", "sun:0,0,0", "lamp:1,2,3"] {
+        let scene = w.write(
+            "s.toml",
+            &format!("mesh = \"quad.obj\"\n\n[render]\nshade = \"shadow\"\nlight = \"{light}\"\n"),
+        );
+        let args = [
+            "render".to_string(),
+            scene.display().to_string(),
+            "-o".into(),
+            w.out("out.png").display().to_string(),
+        ];
+        let msg = fails(&w, &args, &[], 2);
+        assert!(
+            msg.starts_with(&format!("error: {}:5:", scene.display())),
+            "{msg}"
+        );
+        assert!(msg.contains(light), "{msg}");
+    }
+}
+
 /// Regression (issue 15): a polygon that crosses itself was fanned without a word; the
 /// warning says how many there were. (Ear clipping finds no ear in this pentagon.)
 #[test]
