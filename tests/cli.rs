@@ -898,3 +898,34 @@ fn normals_texture_coordinates_and_colours_were_dropped_without_a_word() {
     let stderr = render_stderr(&w, &w.quad(), &["-v"]);
     assert!(!stderr.contains("note:"), "{stderr}");
 }
+
+/// The fuzzers' mesh seeds (concave and self-crossing polygons among them) and the scene
+/// seed with a bad light go through the binary without a panic: rendered, or refused with
+/// one error line.
+#[test]
+fn fuzz_seeds_render_or_are_refused_without_a_panic() {
+    let seeds = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/seeds");
+    let mut inputs: Vec<PathBuf> = ["obj", "ply"]
+        .iter()
+        .flat_map(|kind| std::fs::read_dir(seeds.join(kind)).unwrap())
+        .map(|e| e.unwrap().path())
+        .collect();
+    inputs.push(seeds.join("scene/bad_light.toml"));
+    inputs.sort();
+    let w = Work::new();
+    for input in &inputs {
+        let png = w.out("out.png");
+        let out = run(cltrace(&w.input, &render_args(input, &png, "cpu-bvh")));
+        let stderr = text(&out.stderr);
+        assert!(
+            !stderr.contains("panicked"),
+            "{}: {stderr}",
+            input.display()
+        );
+        match out.status.code() {
+            Some(0) => std::fs::remove_file(&png).unwrap(),
+            Some(2) => assert_eq!(stderr.lines().count(), 1, "{}: {stderr}", input.display()),
+            code => panic!("{}: exit {code:?}: {stderr}", input.display()),
+        }
+    }
+}
