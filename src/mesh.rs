@@ -8,6 +8,10 @@ use glam::Vec3;
 use crate::error::{Error, Result};
 use crate::geometry::Aabb;
 
+mod polygon;
+
+pub use polygon::{EAR_CLIP_BUDGET, Triangulation, triangulate_polygon};
+
 /// Largest coordinate magnitude accepted. The watertight intersection multiplies three
 /// coordinate differences together; with |x| <= 1e12 every such product stays finite in f32.
 pub(crate) const MAX_COORDINATE: f32 = 1e12;

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use cltrace::input::{load_mesh, load_mesh_with_materials};
 use cltrace::material::Material;
-use cltrace::mesh::Mesh;
+use cltrace::mesh::{Mesh, Triangulation, triangulate_polygon};
 use glam::Vec3;
 
 fn write(dir: &Path, name: &str, bytes: impl AsRef<[u8]>) -> PathBuf {
@@ -120,6 +120,252 @@ fn obj_polygons_are_fan_triangulated() {
         ]
     );
     assert_eq!(m.degenerate_count(), 0);
+}
+
+/// The L of the tests below: the square [0, 2]², less the corner [1, 2]², from (2, 0)
+/// counter-clockwise. Its fan from the first corner holds a triangle outside the L.
+const L_SHAPE: [[f32; 2]; 6] = [[2., 0.], [2., 1.], [1., 1.], [1., 2.], [0., 2.], [0., 0.]];
+
+/// Checks that `mesh`'s triangles cover the polygon `inside` describes and nothing else:
+/// every triangle turns the polygon's way (+z) and has its centre inside, and their areas
+/// add up to the polygon's `area`.
+#[track_caller]
+fn covers(mesh: &Mesh, area: f32, inside: impl Fn(Vec3) -> bool) {
+    let mut sum = 0.0;
+    for [a, b, c] in corners(mesh) {
+        let normal = (b - a).cross(c - a);
+        assert!(normal.z >= 0.0, "{a} {b} {c} is turned over");
+        let centre = (a + b + c) / 3.0;
+        assert!(
+            normal == Vec3::ZERO || inside(centre),
+            "{a} {b} {c} lies outside the polygon"
+        );
+        sum += normal.length() / 2.0;
+    }
+    assert!(
+        (sum - area).abs() < 1e-5,
+        "the triangles' area is {sum}, not {area}"
+    );
+}
+
+/// Regression (issue 15): a concave polygon was fanned from its first corner, so the L
+/// `f 1 2 3 4 5 6` became a triangle across its missing corner (and one overlapping it).
+/// Polygons are cut by ear clipping now, in OBJ and in PLY alike.
+#[test]
+fn an_l_shaped_hexagon_was_fan_triangulated_wrongly() {
+    let vertices: Vec<String> = L_SHAPE.iter().map(|[x, y]| format!("{x} {y} 0")).collect();
+    let obj: String = vertices
+        .iter()
+        .map(|v| format!("v {v}\n"))
+        .collect::<String>()
+        + "f 1 2 3 4 5 6\n";
+    let ply = ascii_ply(
+        "property float x\nproperty float y\nproperty float z\n",
+        "property list uchar int vertex_indices\n",
+        &vertices.iter().map(String::as_str).collect::<Vec<_>>(),
+        &["6 0 1 2 3 4 5"],
+    );
+    let in_l =
+        |p: Vec3| p.x > 0.0 && p.y > 0.0 && ((p.x < 2.0 && p.y < 1.0) || (p.x < 1.0 && p.y < 2.0));
+    for mesh in [load("l.obj", &obj), load("l.ply", &ply)] {
+        assert_eq!(mesh.triangle_count(), 4);
+        covers(&mesh, 3.0, in_l);
+    }
+}
+
+/// A convex polygon with corners on its straight edges is still its fan from the first
+/// corner (a zero-area triangle where the fan runs along an edge), as before ear clipping.
+#[test]
+fn convex_polygons_with_straight_edges_keep_their_fan() {
+    let text = "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 2 2 0\nv 0 2 0\nv 0 1 0\nf 1 2 3 4 5 6\n";
+    let m = load("straight.obj", text);
+    let p = |i: usize| {
+        let [x, y] = [[0., 0.], [2., 0.], [2., 1.], [2., 2.], [0., 2.], [0., 1.]][i - 1];
+        v(x, y, 0.0)
+    };
+    let fan: Vec<[Vec3; 3]> = (3..=6).map(|k| [p(1), p(k - 1), p(k)]).collect();
+    assert_eq!(corners(&m), fan);
+    assert_eq!(m.degenerate_count(), 1);
+}
+
+/// A polygon that crosses itself (ear clipping finds no ear in this pentagon) is fanned
+/// from its first corner, and the file's warnings count it; simple ones are not counted.
+#[test]
+fn polygons_that_are_not_simple_are_fanned_and_counted() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = "v 2 0 0\nv 1 2 0\nv 1 3 0\nv 2 2 0\nv 0 1 0\nf 1 2 3 4 5\nf 1 2 3 4\n";
+    let obj = write(dir.path(), "crossed.obj", text);
+    let ply = write(
+        dir.path(),
+        "crossed.ply",
+        ascii_ply(
+            "property float x\nproperty float y\nproperty float z\n",
+            "property list uchar int vertex_indices\n",
+            &["2 0 0", "1 2 0", "1 3 0", "2 2 0", "0 1 0"],
+            &["5 0 1 2 3 4", "5 0 1 2 3 4", "3 0 1 2"],
+        ),
+    );
+    for (path, count) in [(&obj, "1 polygon of"), (&ply, "2 polygons of")] {
+        let file = load_mesh_with_materials(path).unwrap();
+        let verb = if count.starts_with('1') { "is" } else { "are" };
+        let want = format!(
+            "{count} {} {verb} not simple: fan-triangulated",
+            path.display()
+        );
+        assert_eq!(file.warnings, [want]);
+        let first = file.mesh.triangles[..3].to_vec();
+        let fan = [[0, 1, 2], [0, 2, 3], [0, 3, 4]];
+        assert_eq!(
+            first
+                .iter()
+                .map(|t| t.map(|i| file.mesh.positions[i as usize]))
+                .collect::<Vec<_>>(),
+            fan.map(|t: [usize; 3]| t.map(|i| file.mesh.positions[i])),
+        );
+    }
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+
+    /// Ear clipping covers a simple polygon exactly: star-shaped ones around the origin on
+    /// a grid (so that corners on straight edges are exactly straight), in an axis plane,
+    /// either way round and starting anywhere. `n - 2` triangles, none turned over, each
+    /// with its centre inside, their areas adding up to the polygon's.
+    #[test]
+    fn ear_clipping_covers_star_shaped_polygons(
+        points in proptest::collection::vec((-20i32..=20, -20i32..=20), 3..24),
+        midpoints in proptest::collection::vec(proptest::bool::weighted(0.3), 24),
+        start in 0usize..48,
+        reversed: bool,
+        plane in 0usize..3,
+    ) {
+        let polygon = star_polygon(&points, &midpoints);
+        proptest::prop_assume!(polygon.len() >= 3);
+        let mut polygon: Vec<[f64; 2]> = polygon;
+        let len = polygon.len();
+        polygon.rotate_left(start % len);
+        if reversed {
+            polygon.reverse();
+        }
+        let positions: Vec<Vec3> = polygon
+            .iter()
+            .map(|&[x, y]| {
+                let mut p = [0.0; 3];
+                p[plane] = x as f32;
+                p[(plane + 1) % 3] = y as f32;
+                p[(plane + 2) % 3] = 7.0;
+                Vec3::from(p)
+            })
+            .collect();
+        let corners: Vec<u32> = (0..positions.len() as u32).collect();
+        let mut triangles = Vec::new();
+        let how = triangulate_polygon(&positions, &corners, &mut triangles);
+        proptest::prop_assert_eq!(how, Triangulation::Ears);
+        proptest::prop_assert_eq!(triangles.len(), polygon.len() - 2);
+        let signed = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
+            ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])) / 2.0
+        };
+        let area: f64 = (1..polygon.len() - 1)
+            .map(|k| signed(polygon[0], polygon[k], polygon[k + 1]))
+            .sum();
+        let mut sum = 0.0;
+        for t in &triangles {
+            let [a, b, c] = t.map(|i| polygon[i as usize]);
+            let s = signed(a, b, c);
+            proptest::prop_assert!(s * area >= 0.0, "{:?} is turned over", t);
+            let centre = [(a[0] + b[0] + c[0]) / 3.0, (a[1] + b[1] + c[1]) / 3.0];
+            proptest::prop_assert!(
+                s == 0.0 || winding(&polygon, centre) != 0,
+                "{:?} lies outside {:?}", t, polygon
+            );
+            sum += s.abs();
+        }
+        proptest::prop_assert!((sum - area.abs()).abs() < 1e-9, "{} != {}", sum, area);
+    }
+
+    /// A convex polygon's triangles are exactly its fan from the first corner, as before
+    /// ear clipping: points on a circle, any start, either way round.
+    #[test]
+    fn convex_polygons_are_their_fan(
+        angles in proptest::collection::btree_set(0u32..3600, 3..20),
+        reversed: bool,
+    ) {
+        let mut positions: Vec<Vec3> = angles
+            .iter()
+            .map(|&a| {
+                let a = (a as f32 / 10.0).to_radians();
+                Vec3::new(a.cos(), 0.5, a.sin())
+            })
+            .collect();
+        if reversed {
+            positions.reverse();
+        }
+        let n = positions.len() as u32;
+        let corners: Vec<u32> = (0..n).collect();
+        let mut triangles = Vec::new();
+        triangulate_polygon(&positions, &corners, &mut triangles);
+        let fan: Vec<[u32; 3]> = (2..n).map(|k| [0, k - 1, k]).collect();
+        proptest::prop_assert_eq!(triangles, fan);
+    }
+}
+
+/// The grid points sorted by angle around the origin (one per angle), doubled, with the
+/// midpoint of each edge where `midpoints` says: a polygon star-shaped around the origin,
+/// or none (fewer than 3 corners, or an angle gap of half a turn or more).
+fn star_polygon(points: &[(i32, i32)], midpoints: &[bool]) -> Vec<[f64; 2]> {
+    let mut by_angle: Vec<(f64, [f64; 2])> = Vec::new();
+    for &(x, y) in points {
+        if (x, y) == (0, 0) {
+            continue;
+        }
+        let angle = (y as f64).atan2(x as f64);
+        if !by_angle.iter().any(|&(a, _)| a == angle) {
+            by_angle.push((angle, [2.0 * x as f64, 2.0 * y as f64]));
+        }
+    }
+    by_angle.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let n = by_angle.len();
+    if n < 3 {
+        return Vec::new();
+    }
+    let gap = |i: usize| {
+        let next = by_angle[(i + 1) % n].0
+            + if i + 1 == n {
+                std::f64::consts::TAU
+            } else {
+                0.0
+            };
+        next - by_angle[i].0
+    };
+    if (0..n).any(|i| gap(i) >= std::f64::consts::PI - 1e-9) {
+        return Vec::new();
+    }
+    let mut out = Vec::new();
+    for i in 0..n {
+        let (a, b) = (by_angle[i].1, by_angle[(i + 1) % n].1);
+        out.push(a);
+        if midpoints[i % midpoints.len()] {
+            // doubled coordinates: the midpoint is on the grid, exactly on the edge
+            out.push([(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0]);
+        }
+    }
+    out
+}
+
+/// The winding number of `polygon` around `q`.
+fn winding(polygon: &[[f64; 2]], q: [f64; 2]) -> i32 {
+    let mut w = 0;
+    for (i, &a) in polygon.iter().enumerate() {
+        let b = polygon[(i + 1) % polygon.len()];
+        let side = (b[0] - a[0]) * (q[1] - a[1]) - (b[1] - a[1]) * (q[0] - a[0]);
+        if a[1] <= q[1] && b[1] > q[1] && side > 0.0 {
+            w += 1;
+        } else if a[1] > q[1] && b[1] <= q[1] && side < 0.0 {
+            w -= 1;
+        }
+    }
+    w
 }
 
 #[test]
@@ -926,7 +1172,7 @@ fn obj_materials_come_from_the_mtl_file() {
          usemtl lamp\nf 1 2 3 \nusemtl nowhere\nf 1 2 3\n usemtl old_lamp\nf 1 2 3\n",
     );
     let file = load_mesh_with_materials(&obj).unwrap();
-    assert_eq!(file.warning, None);
+    assert_eq!(file.warnings, Vec::<String>::new());
     assert_eq!(file.mesh.triangle_count(), 5);
     let m = &file.materials;
     let albedo = |i| m.of(i).albedo;
@@ -970,7 +1216,7 @@ fn mtl_colours_with_fewer_than_three_numbers_panicked() {
         "mtllib short.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl grey\nf 1 2 3\nusemtl bare\nf 1 2 3\n",
     );
     let file = load_mesh_with_materials(&obj).unwrap();
-    assert_eq!(file.warning, None);
+    assert_eq!(file.warnings, Vec::<String>::new());
     let m = &file.materials;
     assert_eq!(
         (m.of(0).albedo, m.of(0).emission),
@@ -990,16 +1236,19 @@ fn obj_without_its_mtl_file_is_grey_with_a_warning() {
     let text = "mtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n";
     let obj = write(dir.path(), "grey.obj", text);
     let file = load_mesh_with_materials(&obj).unwrap();
-    let warning = file.warning.expect("a warning");
+    let [warning] = &file.warnings[..] else {
+        panic!("not one warning: {:?}", file.warnings)
+    };
+    let tried = std::path::absolute(dir.path().join("gone.mtl")).unwrap();
     assert!(
-        warning.contains("grey.obj") && warning.contains("material"),
+        warning.contains("grey.obj") && warning.contains(&tried.display().to_string()),
         "{warning}"
     );
     assert_eq!(file.materials.of(0), &Material::default());
 
     write(dir.path(), "gone.mtl", "newmtl red\nKd one two three\n");
     let file = load_mesh_with_materials(&obj).unwrap();
-    assert!(file.warning.is_some(), "a broken MTL file warns");
+    assert_eq!(file.warnings.len(), 1, "a broken MTL file warns");
     assert_eq!(file.materials.of(0), &Material::default());
 }
 
@@ -1010,7 +1259,7 @@ fn cornell_box_has_its_light() {
         return;
     };
     let file = load_mesh_with_materials(&path).unwrap();
-    assert_eq!(file.warning, None);
+    assert_eq!(file.warnings, Vec::<String>::new());
     let emitting = (0..file.mesh.triangle_count())
         .filter(|&i| file.materials.of(i).emits())
         .count();

@@ -355,10 +355,14 @@ fn render_with(
     let crate::input::MeshFile {
         mesh,
         materials,
-        warning,
+        warnings,
+        notes,
     } = mesh;
-    if let Some(warning) = warning {
+    for warning in warnings {
         v.say(format!("warning: {warning}"));
+    }
+    for note in notes {
+        v.detail(format!("note: {note}"));
     }
     crate::interrupt::check()?;
     if let Some(d) = &device {

@@ -10,9 +10,11 @@ pub mod scene_file;
 use std::io::Read;
 use std::path::Path;
 
+use glam::Vec3;
+
 use crate::error::{Error, Result};
 use crate::material::Materials;
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, Triangulation, triangulate_polygon};
 
 /// Mesh file formats, told apart by extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -55,9 +57,13 @@ pub struct MeshFile {
     pub mesh: Mesh,
     /// An OBJ's materials from its MTL files (`Kd`, `Ke`); grey for PLY.
     pub materials: Materials,
-    /// Why the materials are grey although the file names some (a missing or broken MTL
-    /// file): worth a warning, not an error.
-    pub warning: Option<String>,
+    /// What the file holds that is wrong but no reason to refuse it, each a line to warn
+    /// with: why the materials are grey although the file names some (a missing or broken
+    /// MTL file), how many polygons could not be cut exactly.
+    pub warnings: Vec<String>,
+    /// What the file holds that cltrace reads past without using yet (vertex normals,
+    /// texture coordinates, vertex colours), each a line for the verbose output.
+    pub notes: Vec<String>,
 }
 
 /// Reads a mesh file with its materials, as [`load_mesh`] does plus the OBJ's MTL files.
@@ -108,14 +114,64 @@ fn parse(
     };
     let file = match format {
         MeshFormat::Obj => obj::parse(path, bytes, read_materials)?,
-        MeshFormat::Ply => MeshFile {
-            mesh: ply::parse(path, bytes)?,
-            materials: Materials::default(),
-            warning: None,
-        },
+        MeshFormat::Ply => ply::parse(path, bytes)?,
     };
     file.mesh.check(path)?;
     Ok(file)
+}
+
+/// The polygons of a file cut into triangles, with count of those that could not be cut
+/// exactly, for the loader's warning.
+#[derive(Default)]
+pub(crate) struct Polygons {
+    not_simple: usize,
+    too_costly: usize,
+}
+
+impl Polygons {
+    /// Cuts the polygon `corners` (indices into `positions`) into triangles appended to
+    /// `out`, as [`triangulate_polygon`] does, and counts it if it had to be fanned.
+    pub(crate) fn cut(&mut self, positions: &[Vec3], corners: &[u32], out: &mut Vec<[u32; 3]>) {
+        match triangulate_polygon(positions, corners, out) {
+            Triangulation::NotSimple => self.not_simple += 1,
+            Triangulation::TooCostly => self.too_costly += 1,
+            Triangulation::Ears | Triangulation::Flat => {}
+        }
+    }
+
+    /// The warnings for `path`: how many polygons were fanned because they are not simple,
+    /// or too large to cut.
+    pub(crate) fn warnings(&self, path: &Path) -> Vec<String> {
+        let counted = |count: usize, why: &str| {
+            let (noun, verb) = match count {
+                1 => ("polygon", "is"),
+                _ => ("polygons", "are"),
+            };
+            format!(
+                "{count} {noun} of {} {verb} {why}: fan-triangulated",
+                path.display()
+            )
+        };
+        let mut out = Vec::new();
+        if self.not_simple > 0 {
+            out.push(counted(self.not_simple, "not simple"));
+        }
+        if self.too_costly > 0 {
+            out.push(counted(self.too_costly, "too large to ear-clip"));
+        }
+        out
+    }
+}
+
+/// The note for what a mesh file holds that is not used yet (`what`, e.g. "vertex
+/// normals"), or `None` when it holds nothing of the kind.
+pub(crate) fn unused_note(path: &Path, what: &[&str]) -> Option<String> {
+    let list = match what {
+        [] => return None,
+        [one] => one.to_string(),
+        [rest @ .., last] => format!("{} and {last}", rest.join(", ")),
+    };
+    Some(format!("{}: its {list} are not used yet", path.display()))
 }
 
 /// The whole file.

@@ -1,15 +1,36 @@
 //! Materials of an OBJ file from its MTL library, through `tobj`: the diffuse colour `Kd`
 //! and the emitted radiance `Ke` of each material, mapped onto the triangles.
 
+use std::cell::RefCell;
 use std::path::Path;
 
+use crate::input::io_reason;
 use crate::material::{Material, Materials};
 
-/// Reads the material library `name` (as an OBJ's `mtllib` names it) beside `obj`.
-pub(super) fn load_library(obj: &Path, name: &Path) -> tobj::MTLLoadResult {
-    let folder = obj.parent().unwrap_or(Path::new(""));
-    let bytes = std::fs::read(folder.join(name)).map_err(|_| tobj::LoadError::OpenFileFailed)?;
-    tobj::load_mtl_buf(&mut std::io::Cursor::new(complete_colours(&bytes)))
+/// Reads the material library `name` (as an OBJ's `mtllib` names it) beside `obj`. tobj
+/// keeps only an error's kind, so what went wrong, with the path tried, is added to
+/// `failures` ("cannot open its material library /a/b.mtl (no such file)").
+pub(super) fn load_library(
+    obj: &Path,
+    name: &Path,
+    failures: &RefCell<Vec<String>>,
+) -> tobj::MTLLoadResult {
+    let path = obj.parent().unwrap_or(Path::new("")).join(name);
+    let fail = |what: &str, reason: String| {
+        // Absolute, so that the message says where it looked whatever the working folder.
+        let tried = std::path::absolute(&path).unwrap_or_else(|_| path.clone());
+        failures.borrow_mut().push(format!(
+            "cannot {what} its material library {} ({reason})",
+            tried.display()
+        ));
+    };
+    let bytes = std::fs::read(&path).map_err(|e| {
+        fail("open", io_reason(&e));
+        tobj::LoadError::OpenFileFailed
+    })?;
+    tobj::load_mtl_buf(&mut std::io::Cursor::new(complete_colours(&bytes))).inspect_err(|e| {
+        fail("read", e.to_string());
+    })
 }
 
 /// The colour keywords whose values tobj reads as exactly three numbers.
@@ -67,37 +88,45 @@ pub(super) fn convert(m: &tobj::Material) -> Material {
 
 /// The per-triangle materials of the models (in file order, `triangles[i]` triangles each)
 /// given tobj's material list: index 0 is the default grey, then the library's materials.
-/// Returns a warning when the file names a library that could not be read.
+/// Returns a warning for each library that could not be read, from `failures` (as
+/// [`load_library`] wrote them).
 pub(super) fn assign(
     models: &[tobj::Model],
+    triangles: &[usize],
     library: Result<Vec<tobj::Material>, tobj::LoadError>,
+    failures: Vec<String>,
     obj: &Path,
-) -> (Materials, Option<String>) {
-    let (list, warning) = match library {
-        Ok(list) => (list, None),
-        // tobj reports an error only when an `mtllib` was named and none could be read.
-        Err(e) => (
-            Vec::new(),
-            Some(format!(
-                "{}: cannot read its material library ({e}): the mesh is grey",
-                obj.display()
-            )),
-        ),
+) -> (Materials, Vec<String>) {
+    // tobj reports an error only when an `mtllib` was named and none could be read.
+    let (list, outcome, error) = match library {
+        Ok(list) => (list, "triangles with its materials are grey", None),
+        Err(e) => (Vec::new(), "every triangle is grey", Some(e)),
     };
+    let mut warnings: Vec<String> = failures
+        .iter()
+        .map(|failure| format!("{}: {failure}; {outcome}", obj.display()))
+        .collect();
+    if let (Some(e), true) = (error, warnings.is_empty()) {
+        warnings.push(format!(
+            "{}: cannot read its material library ({e}); {outcome}",
+            obj.display()
+        ));
+    }
     if list.is_empty() {
-        return (Materials::default(), warning);
+        return (Materials::default(), warnings);
     }
     let mut materials = vec![Material::default()];
     materials.extend(list.iter().map(convert));
     let per_triangle = models
         .iter()
-        .flat_map(|m| {
+        .zip(triangles)
+        .flat_map(|(m, &count)| {
             let id = m
                 .mesh
                 .material_id
                 .filter(|&i| i < list.len())
                 .map_or(0, |i| i as u32 + 1);
-            std::iter::repeat_n(id, m.mesh.indices.len() / 3)
+            std::iter::repeat_n(id, count)
         })
         .collect();
     (
@@ -105,7 +134,7 @@ pub(super) fn assign(
             list: materials,
             per_triangle,
         },
-        warning,
+        warnings,
     )
 }
 

@@ -1,5 +1,6 @@
-//! Wavefront OBJ through `tobj`: polygons fan-triangulated, every object and group merged
-//! into one triangle list in file order.
+//! Wavefront OBJ through `tobj`: polygons cut into triangles by ear clipping
+//! ([`crate::mesh::triangulate_polygon`]), every object and group merged into one triangle
+//! list in file order.
 
 use std::borrow::Cow;
 use std::io::Cursor;
@@ -7,7 +8,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::{MeshFile, mtl, quoted};
+use super::{MeshFile, Polygons, mtl, quoted, unused_note};
 use crate::error::{Error, Result};
 use crate::material::Materials;
 use crate::mesh::{Mesh, coordinate_problem};
@@ -26,48 +27,113 @@ pub(super) fn parse(path: &Path, bytes: &[u8], read_materials: bool) -> Result<M
             "the file holds NUL bytes: binary data or UTF-16 text, not OBJ text",
         ));
     }
-    let text = positions_only(bytes);
+    let mut unused = Unused::default();
+    let text = positions_only(bytes, &mut unused);
     let bytes: &[u8] = &text;
     let options = tobj::LoadOptions {
         single_index: true,
-        triangulate: true,
+        // tobj fans polygons from their first corner, which is wrong for concave ones:
+        // they are cut here, by ear clipping.
+        triangulate: false,
         ignore_points: true,
         ignore_lines: true,
     };
     // A missing or broken MTL file must not stop the geometry: it comes back as an error
     // in `library`, and the mesh turns grey with a warning.
+    let failures = std::cell::RefCell::new(Vec::new());
     let load_library = |name: &Path| match read_materials {
-        true => mtl::load_library(path, name),
+        true => mtl::load_library(path, name, &failures),
         false => Err(tobj::LoadError::OpenFileFailed),
     };
     let (models, library) = tobj::load_obj_buf(&mut Cursor::new(bytes), &options, load_library)
         .map_err(|e| describe(path, bytes, e))?;
 
     let mut mesh = Mesh::default();
+    let mut polygons = Polygons::default();
+    // Triangles of each model, for its material.
+    let mut per_model = Vec::with_capacity(models.len());
+    let mut corners = Vec::new();
     for model in &models {
         let m = &model.mesh;
         let offset = mesh.positions.len() as u32;
+        let before = mesh.triangles.len();
         mesh.positions.extend(
             m.positions
                 .chunks_exact(3)
                 .map(|p| Vec3::new(p[0], p[1], p[2])),
         );
-        mesh.triangles.extend(
-            m.indices
-                .chunks_exact(3)
-                .map(|t| [t[0] + offset, t[1] + offset, t[2] + offset]),
-        );
+        // tobj leaves the arities out when every face is a triangle.
+        if m.face_arities.is_empty() {
+            mesh.triangles.extend(
+                m.indices
+                    .chunks_exact(3)
+                    .map(|t| [t[0] + offset, t[1] + offset, t[2] + offset]),
+            );
+        } else {
+            let mut start = 0;
+            for &arity in &m.face_arities {
+                let face = &m.indices[start..start + arity as usize];
+                start += arity as usize;
+                if face.is_empty() {
+                    return Err(empty_face(path, bytes));
+                }
+                corners.clear();
+                corners.extend(face.iter().map(|&i| i + offset));
+                polygons.cut(&mesh.positions, &corners, &mut mesh.triangles);
+            }
+        }
+        per_model.push(mesh.triangles.len() - before);
     }
     check_positions(path, bytes, &mesh)?;
-    let (materials, warning) = match read_materials {
-        true => mtl::assign(&models, library, path),
-        false => (Materials::default(), None),
+    let mut warnings = Vec::new();
+    let materials = match read_materials {
+        true => {
+            let failures = failures.into_inner();
+            let (materials, failed) = mtl::assign(&models, &per_model, library, failures, path);
+            warnings.extend(failed);
+            materials
+        }
+        false => Materials::default(),
     };
+    warnings.extend(polygons.warnings(path));
     Ok(MeshFile {
         mesh,
         materials,
-        warning,
+        warnings,
+        notes: unused.note(path).into_iter().collect(),
     })
+}
+
+/// What an OBJ file holds that cltrace reads past: `vn`, `vt` lines and vertex colours.
+#[derive(Default)]
+struct Unused {
+    normals: bool,
+    texture_coordinates: bool,
+    colours: bool,
+}
+
+impl Unused {
+    fn note(&self, path: &Path) -> Option<String> {
+        let what: Vec<&str> = [
+            (self.normals, "vertex normals"),
+            (self.texture_coordinates, "texture coordinates"),
+            (self.colours, "vertex colours"),
+        ]
+        .into_iter()
+        .filter_map(|(has, what)| has.then_some(what))
+        .collect();
+        unused_note(path, &what)
+    }
+}
+
+/// The error for an `f` line without vertices (tobj gives it no line), at its line.
+fn empty_face(path: &Path, bytes: &[u8]) -> Error {
+    match first_line(bytes, |words| {
+        (words == ["f"]).then(|| "a face without vertices".to_string())
+    }) {
+        Some((line, message)) => Error::input_at(path, line, message),
+        None => Error::input(path, "a face without vertices"),
+    }
 }
 
 /// The text tobj is given: what cltrace reads (positions and faces) with every line kept
@@ -76,12 +142,12 @@ pub(super) fn parse(path: &Path, bytes: &[u8], read_materials: bool) -> Result<M
 /// arithmetic that overflows (a panic in debug builds) on `f 1/0 2/0 3/0`. A `usemtl` or
 /// `mtllib` without a name goes too: tobj fails on the first and cannot open the second. Line (`l`) and point (`p`) elements go too: tobj
 /// would make a triangle of `l 1 2 3`. Vertex colours are dropped too: tobj refuses a
-/// file where only some vertices have them.
-fn positions_only(bytes: &[u8]) -> Cow<'_, [u8]> {
+/// file where only some vertices have them. What is dropped is recorded in `unused`.
+fn positions_only<'a>(bytes: &'a [u8], unused: &mut Unused) -> Cow<'a, [u8]> {
     let mut out: Option<Vec<u8>> = None;
     let mut done = 0;
     for line in bytes.split_inclusive(|&b| b == b'\n') {
-        match (rewrite_line(line), &mut out) {
+        match (rewrite_line(line, unused), &mut out) {
             (None, Some(out)) => out.extend_from_slice(line),
             (None, None) => {}
             (Some(new), out) => out
@@ -104,7 +170,7 @@ fn positions_only(bytes: &[u8]) -> Cow<'_, [u8]> {
 /// split as tobj splits them, at any Unicode whitespace (a vertical tab or a no-break space
 /// too): a `vt` reference that tobj sees but this missed would reach tobj's overflowing
 /// arithmetic. A line that is not UTF-8 is kept, for tobj to refuse.
-fn rewrite_line(line: &[u8]) -> Option<Vec<u8>> {
+fn rewrite_line(line: &[u8], unused: &mut Unused) -> Option<Vec<u8>> {
     let text = std::str::from_utf8(line).ok()?;
     let mut words = text.split_whitespace();
     let keyword = words.next()?;
@@ -118,8 +184,16 @@ fn rewrite_line(line: &[u8]) -> Option<Vec<u8>> {
         Some(new.into_bytes())
     };
     match keyword {
+        "vt" => {
+            unused.texture_coordinates = true;
+            Some(b"\n".to_vec())
+        }
+        "vn" => {
+            unused.normals = true;
+            Some(b"\n".to_vec())
+        }
         // Lines and points are not surfaces, but tobj makes a triangle of `l 1 2 3`.
-        "vt" | "vn" | "l" | "p" => Some(b"\n".to_vec()),
+        "l" | "p" => Some(b"\n".to_vec()),
         // tobj takes the name after the first space, so a tab or leading blank would lose
         // it: write `keyword name` (names may hold spaces), or nothing without a name.
         "usemtl" | "mtllib" => {
@@ -138,7 +212,10 @@ fn rewrite_line(line: &[u8]) -> Option<Vec<u8>> {
             }
         })),
         // `v x y z r g b`: keep `v x y z`
-        "v" if words.clone().count() == 6 => rebuilt(&mut words.take(3)),
+        "v" if words.clone().count() == 6 => {
+            unused.colours = true;
+            rebuilt(&mut words.take(3))
+        }
         _ => None,
     }
 }

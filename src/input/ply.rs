@@ -1,5 +1,6 @@
 //! Stanford PLY (ASCII, binary little- and big-endian) through `ply-rs-bw`: the `vertex`
-//! element's x, y, z and the `face` element's index list, faces of any size fan-triangulated.
+//! element's x, y, z and the `face` element's index list, faces of any size cut into
+//! triangles by ear clipping ([`crate::mesh::triangulate_polygon`]).
 
 use std::io::{BufReader, Cursor};
 use std::path::Path;
@@ -8,10 +9,44 @@ use glam::Vec3;
 use ply_rs_bw::parser::{ParseError, Parser, Reader};
 use ply_rs_bw::ply::{Encoding, Property, PropertyAccess, PropertyAccessResult};
 
+use super::{MeshFile, Polygons, unused_note};
 use crate::error::{Error, Result};
+use crate::material::Materials;
 use crate::mesh::Mesh;
 
-pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
+/// Vertex properties cltrace reads past, by what they are: normals, texture coordinates
+/// (under the names PLY writers use) and colours.
+const UNUSED: [(&str, &[&str]); 3] = [
+    ("vertex normals", &["nx", "ny", "nz"]),
+    (
+        "texture coordinates",
+        &[
+            "s",
+            "t",
+            "u",
+            "v",
+            "texture_u",
+            "texture_v",
+            "texture_s",
+            "texture_t",
+        ],
+    ),
+    (
+        "vertex colours",
+        &[
+            "red",
+            "green",
+            "blue",
+            "alpha",
+            "diffuse_red",
+            "diffuse_green",
+            "diffuse_blue",
+        ],
+    ),
+];
+
+/// Parses a PLY file's bytes; `path` names it in messages. Its triangles are grey.
+pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<MeshFile> {
     let mut reader = Reader::new(BufReader::new(Cursor::new(bytes)));
     let header = Parser::<Vertex>::new()
         .read_header(&mut reader)
@@ -29,6 +64,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
 
     let mut vertices = Vec::new();
     let mut faces = Vec::new();
+    let mut unused = Vec::new();
     for element in header.elements.values() {
         match element.name.as_str() {
             "vertex" => {
@@ -40,6 +76,11 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
                         ));
                     }
                 }
+                unused = UNUSED
+                    .iter()
+                    .filter(|(_, names)| names.iter().any(|n| element.properties.contains_key(*n)))
+                    .map(|(what, _)| *what)
+                    .collect();
                 vertices = Parser::<Vertex>::new()
                     .read_payload_for_element(&mut reader, element, &header)
                     .map_err(fail)?;
@@ -71,6 +112,8 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
 
     let positions: Vec<Vec3> = vertices.iter().map(|v| v.0).collect();
     let mut triangles = Vec::with_capacity(faces.len());
+    let mut polygons = Polygons::default();
+    let mut corners = Vec::new();
     for (i, face) in faces.iter().enumerate() {
         let idx = &face.0;
         if let Some(&bad) = idx.iter().find(|&&v| v < 0 || v >= positions.len() as i64) {
@@ -82,11 +125,16 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
                 ),
             ));
         }
-        for k in 2..idx.len() {
-            triangles.push([idx[0] as u32, idx[k - 1] as u32, idx[k] as u32]);
-        }
+        corners.clear();
+        corners.extend(idx.iter().map(|&v| v as u32));
+        polygons.cut(&positions, &corners, &mut triangles);
     }
-    Ok(Mesh::new(positions, triangles))
+    Ok(MeshFile {
+        mesh: Mesh::new(positions, triangles),
+        materials: Materials::default(),
+        warnings: polygons.warnings(path),
+        notes: unused_note(path, &unused).into_iter().collect(),
+    })
 }
 
 /// One line for a `ply-rs-bw` error, at its line where `lines` (the text it read is lines

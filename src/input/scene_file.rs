@@ -28,6 +28,7 @@ use crate::error::{Error, Result};
 use crate::input::generate::Generator;
 use crate::input::load_mesh;
 use crate::mesh::Mesh;
+use crate::render::integrator::Light;
 use crate::render::{Method, Shade};
 
 /// The default scene, built into the binary so that `cltrace render` needs no files.
@@ -63,7 +64,8 @@ impl MeshSource {
                 Ok(crate::input::MeshFile {
                     mesh,
                     materials,
-                    warning: None,
+                    warnings: Vec::new(),
+                    notes: Vec::new(),
                 })
             }
         }
@@ -103,7 +105,18 @@ pub struct RenderSettings {
     /// Bounces of the path tracer.
     pub max_bounces: Option<u32>,
     /// The light of the shadow mode: `sun:x,y,z` or `point:x,y,z`.
+    #[serde(default, deserialize_with = "checked_light")]
     pub light: Option<String>,
+}
+
+/// A scene file's `light`, checked as it is read, so that a bad one is an error at its
+/// line like any other bad value (checked after parsing, it would name no line).
+fn checked_light<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> std::result::Result<Option<String>, D::Error> {
+    let text = String::deserialize(d)?;
+    text.parse::<Light>().map_err(serde::de::Error::custom)?;
+    Ok(Some(text))
 }
 
 impl RenderSettings {
@@ -275,6 +288,7 @@ mod tests {
             ("[generator]\nkind = \"cube\"\nsize = 2\n", 1),
             ("[generator]\nkind = \"teapot\"\n", 2),
             ("mesh = \"x.obj\"\n[render]\nmethod = \"magic\"\n", 3),
+            ("mesh = \"x.obj\"\n[render]\nlight = \"sun:1,2\"\n", 3),
         ] {
             let err = parse(text).unwrap_err();
             let msg = err.to_string();
