@@ -102,8 +102,16 @@ fn bvh_raw_regression_inputs_build_and_trace_without_a_panic() {
 }
 
 #[test]
+fn mtl_regression_inputs_read_without_a_panic() {
+    let n = run_all("mtl", |_, bytes| {
+        let _ = fuzz_cases::mtl(bytes);
+    });
+    assert!(n > 0, "tests/fuzz_regressions/mtl/ holds no inputs");
+}
+
+#[test]
 fn there_are_regression_inputs() {
-    let total: usize = ["obj", "ply", "scene", "bvh", "bvh_raw"]
+    let total: usize = ["obj", "ply", "scene", "bvh", "bvh_raw", "mtl"]
         .iter()
         .map(|t| inputs(t).len())
         .sum();

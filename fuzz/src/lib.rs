@@ -63,6 +63,25 @@ pub fn ply(data: &[u8]) -> cltrace::Result<Mesh> {
     mesh_bytes("fuzz.ply", data)
 }
 
+/// Target `mtl`: the bytes as an MTL material library. Every material read must have an
+/// albedo in [0, 1] and a finite, non-negative emission; a refusal is fine (the loader
+/// turns it into a warning).
+pub fn mtl(data: &[u8]) -> Option<Vec<cltrace::material::Material>> {
+    let materials = cltrace::input::parse_material_library(data).ok()?;
+    for m in &materials {
+        let (albedo, emission) = (m.albedo, m.emission);
+        assert!(
+            albedo.iter().all(|c| (0.0..=1.0).contains(c)),
+            "albedo out of [0, 1]: {albedo:?}"
+        );
+        assert!(
+            emission.iter().all(|c| c.is_finite() && *c >= 0.0),
+            "emission not finite and non-negative: {emission:?}"
+        );
+    }
+    Some(materials)
+}
+
 /// Generated meshes up to this size are made and checked by the `scene` target.
 const MAX_GENERATED: u64 = 20_000;
 

@@ -16,6 +16,8 @@ use crate::error::{Error, Result};
 use crate::material::Materials;
 use crate::mesh::{Mesh, Triangulation, triangulate_polygon};
 
+pub use mtl::parse_library as parse_material_library;
+
 /// Mesh file formats, told apart by extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MeshFormat {

@@ -33,6 +33,14 @@ pub(super) fn load_library(
     })
 }
 
+/// The materials of an MTL library's bytes as the loader reads them (the fuzz target
+/// `mtl`), or tobj's reason for refusing it.
+pub fn parse_library(bytes: &[u8]) -> Result<Vec<Material>, String> {
+    tobj::load_mtl_buf(&mut std::io::Cursor::new(complete_colours(bytes)))
+        .map(|(list, _)| list.iter().map(convert).collect())
+        .map_err(|e| e.to_string())
+}
+
 /// The colour keywords whose values tobj reads as exactly three numbers.
 const COLOURS: [&[u8]; 4] = [b"Ka", b"Kd", b"Ks", b"Ke"];
 
