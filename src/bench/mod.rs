@@ -196,9 +196,10 @@ struct BenchScene {
 }
 
 /// Where a method runs: the host, or an OpenCL device.
+// The device boxed: an opened device (with its program cache) is far larger than `Host`.
 enum Target {
     Host,
-    Device(ClDevice),
+    Device(Box<ClDevice>),
 }
 
 /// Runs the whole matrix and returns its rows (also printed as they come, with
@@ -263,7 +264,7 @@ pub(crate) fn run(req: &BenchRequest) -> Result<Vec<BenchRow>> {
         for &method in &req.methods {
             for target in &targets {
                 let device = match (method.uses_opencl(), target) {
-                    (true, Target::Device(d)) => Some(d),
+                    (true, Target::Device(d)) => Some(&**d),
                     (false, Target::Host) => None,
                     _ => continue,
                 };
@@ -658,7 +659,7 @@ fn targets(req: &BenchRequest) -> Result<Vec<Target>> {
             )));
         }
         for info in chosen {
-            targets.push(Target::Device(ClDevice::open(info)?));
+            targets.push(Target::Device(Box::new(ClDevice::open(info)?)));
         }
     }
     Ok(targets)
