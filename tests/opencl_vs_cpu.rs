@@ -1,6 +1,7 @@
-//! The OpenCL kernels (brute force and BVH) against the CPU brute-force reference: the same
-//! triangle on every pixel, differing only by ties, on generated scenes seen from outside,
-//! inside and at grazing angles, and on the shared real meshes when they are present. The
+//! The OpenCL kernels (brute force and BVH), on every device, against the CPU brute-force
+//! reference: the same triangle on every pixel, differing only by ties, on generated scenes
+//! seen from outside, inside and at grazing angles, and on the shared real meshes when they
+//! are present. The
 //! checks are generic: [`host_frames_match`] over implementations of `ClosestHit`,
 //! [`device_frames_match`] over the OpenCL tracers (`DeviceTracer`), and the ray-buffer
 //! tests ask every tracer on both sides the same rays.
@@ -179,29 +180,30 @@ fn host_frames_match<T: ClosestHit>(what: &str, make: impl Fn(&Mesh) -> T) {
 /// Each of `tracers`, its BVH built with each of `builds`, renders every case like the
 /// reference (which must see something).
 fn device_frames_match(tracers: &[DeviceTracer], builds: &[(&str, BuildOptions)]) {
-    let device = device();
-    for c in cases() {
-        let reference = reference(&c);
-        assert!(
-            coverage(&reference) > 0,
-            "{}: the camera sees nothing",
-            c.name
-        );
-        for &tracer in tracers {
-            for (build, options) in builds {
-                let frame = device_frame(&device, tracer, &c, options);
-                check(
-                    &c,
-                    &format!("{} ({build})", tracer.name()),
-                    &reference,
-                    &frame,
-                );
-                if tracer == DeviceTracer::Brute {
-                    break; // no tree to build
+    on_every_device(|device| {
+        for c in cases() {
+            let reference = reference(&c);
+            assert!(
+                coverage(&reference) > 0,
+                "{}: the camera sees nothing",
+                c.name
+            );
+            for &tracer in tracers {
+                for (build, options) in builds {
+                    let frame = device_frame(device, tracer, &c, options);
+                    check(
+                        &c,
+                        &format!("{} ({build})", tracer.name()),
+                        &reference,
+                        &frame,
+                    );
+                    if tracer == DeviceTracer::Brute {
+                        break; // no tree to build
+                    }
                 }
             }
         }
-    }
+    });
 }
 
 fn default_build() -> (&'static str, BuildOptions) {
@@ -252,109 +254,111 @@ fn cpu_bvh_matches_the_cpu_reference() {
 fn pixels_and_colours_agree_between_kernels_and_host() {
     // Beyond the hit records, the shaded colours of the three shade modes agree to within
     // one step of 8-bit rounding (the device's sqrt and division may differ in the last bit).
-    let device = device();
-    let c = &cases()[4];
-    for shade in [Shade::Normal, Shade::Depth, Shade::Lambert] {
-        let params = ShadeParams::new(shade, &c.camera, &c.mesh.bounds());
-        let tris = triangles_in_order(&c.mesh, 0..c.mesh.triangle_count() as u32);
-        let host = cpu::render(
-            &cltrace::brute::BruteForce {
-                triangles: tris.clone(),
-            },
-            &c.camera.pinhole(),
-            c.camera.width,
-            c.camera.height,
-            &params,
-            None,
-        );
-        let program = ClTracer::compile_brute(&device).unwrap();
-        let mut tracer = ClTracer::brute(&device, &program, &tris).unwrap();
-        let (frame, _) = tracer
-            .render(
+    on_every_device(|device| {
+        let c = &cases()[4];
+        for shade in [Shade::Normal, Shade::Depth, Shade::Lambert] {
+            let params = ShadeParams::new(shade, &c.camera, &c.mesh.bounds());
+            let tris = triangles_in_order(&c.mesh, 0..c.mesh.triangle_count() as u32);
+            let host = cpu::render(
+                &cltrace::brute::BruteForce {
+                    triangles: tris.clone(),
+                },
                 &c.camera.pinhole(),
                 c.camera.width,
                 c.camera.height,
                 &params,
-                false,
-            )
-            .unwrap();
-        for (i, (a, b)) in host.colors.iter().zip(&frame.colors).enumerate() {
-            let (a, b) = (a.to_le_bytes(), b.to_le_bytes());
-            let worst = a.iter().zip(b).map(|(x, y)| x.abs_diff(y)).max().unwrap();
-            assert!(
-                worst <= 1,
-                "{shade:?}: pixel {i} is {a:?} on the host, {b:?} on the device"
+                None,
             );
+            let program = ClTracer::compile_brute(device).unwrap();
+            let mut tracer = ClTracer::brute(device, &program, &tris).unwrap();
+            let (frame, _) = tracer
+                .render(
+                    &c.camera.pinhole(),
+                    c.camera.width,
+                    c.camera.height,
+                    &params,
+                    false,
+                )
+                .unwrap();
+            for (i, (a, b)) in host.colors.iter().zip(&frame.colors).enumerate() {
+                let (a, b) = (a.to_le_bytes(), b.to_le_bytes());
+                let worst = a.iter().zip(b).map(|(x, y)| x.abs_diff(y)).max().unwrap();
+                assert!(
+                    worst <= 1,
+                    "{shade:?}: pixel {i} is {a:?} on the host, {b:?} on the device"
+                );
+            }
         }
-    }
+    });
 }
 
 /// The real meshes, when present: the BVH kernels of every layout against the CPU brute
 /// force.
 #[test]
 fn opencl_bvh_matches_on_the_bunny_and_the_teapot() {
-    let device = device();
-    for (name, size) in [("stanford_bunny.obj", 96), ("utah_teapot.obj", 128)] {
-        let Some(path) = shared_scene(name) else {
-            continue;
-        };
-        let mesh = load_mesh(&path).unwrap();
-        let c = Case {
-            name: name.to_string(),
-            camera: auto_camera(&mesh, size, size),
-            mesh,
-        };
-        let reference = reference(&c);
-        for tracer in DeviceTracer::layouts() {
-            let frame = device_frame(&device, tracer, &c, &BuildOptions::default());
-            check(&c, &tracer.name(), &reference, &frame);
+    on_every_device(|device| {
+        for (name, size) in [("stanford_bunny.obj", 96), ("utah_teapot.obj", 128)] {
+            let Some(path) = shared_scene(name) else {
+                continue;
+            };
+            let mesh = load_mesh(&path).unwrap();
+            let c = Case {
+                name: name.to_string(),
+                camera: auto_camera(&mesh, size, size),
+                mesh,
+            };
+            let reference = reference(&c);
+            for tracer in DeviceTracer::layouts() {
+                let frame = device_frame(device, tracer, &c, &BuildOptions::default());
+                check(&c, &tracer.name(), &reference, &frame);
+            }
         }
-    }
+    });
 }
 
 /// A tree deeper than the kernel's stack (compiled too small on purpose) must be reported,
 /// not turned into a wrong image.
 #[test]
 fn stack_overflow_is_an_error_not_an_image() {
-    let device = device();
-    let c = &cases()[0];
-    let bvh = Bin32Bvh::new(Bvh::build(&c.mesh, &BuildOptions::default()), &c.mesh);
-    assert!(bvh.depth > 3);
-    let program = ClTracer::compile_bvh(&device, 2).unwrap();
-    let mut tracer = ClTracer::bvh(&device, &program, &bvh).unwrap();
-    let shade = ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds());
-    let err = tracer
-        .render(
-            &c.camera.pinhole(),
-            c.camera.width,
-            c.camera.height,
-            &shade,
-            false,
-        )
-        .unwrap_err();
-    assert!(err.to_string().contains("overflowed"), "{err}");
-    // The same tracer recovers once given a kernel with the right stack.
-    let program = ClTracer::compile_bvh(&device, bvh.depth).unwrap();
-    let mut tracer = ClTracer::bvh(&device, &program, &bvh).unwrap();
-    assert!(
-        tracer
+    on_every_device(|device| {
+        let c = &cases()[0];
+        let bvh = Bin32Bvh::new(Bvh::build(&c.mesh, &BuildOptions::default()), &c.mesh);
+        assert!(bvh.depth > 3);
+        let program = ClTracer::compile_bvh(device, 2).unwrap();
+        let mut tracer = ClTracer::bvh(device, &program, &bvh).unwrap();
+        let shade = ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds());
+        let err = tracer
             .render(
                 &c.camera.pinhole(),
                 c.camera.width,
                 c.camera.height,
                 &shade,
-                false
+                false,
             )
-            .is_ok()
-    );
+            .unwrap_err();
+        assert!(err.to_string().contains("overflowed"), "{err}");
+        // The same tracer recovers once given a kernel with the right stack.
+        let program = ClTracer::compile_bvh(device, bvh.depth).unwrap();
+        let mut tracer = ClTracer::bvh(device, &program, &bvh).unwrap();
+        assert!(
+            tracer
+                .render(
+                    &c.camera.pinhole(),
+                    c.camera.width,
+                    c.camera.height,
+                    &shade,
+                    false
+                )
+                .is_ok()
+        );
+    });
 }
 
 /// Arbitrary rays from a buffer, closest and any hit, ending at `t_max`: every tracer on
-/// the host and on the device against brute force on the host (the same triangle, no ties
-/// in a random soup).
+/// the host and on every device against brute force on the host (the same triangle, no
+/// ties in a random soup).
 #[test]
 fn ray_buffers_match_the_host_for_closest_and_any_hits() {
-    let device = device();
     let mesh = generate(Generator::Soup {
         triangles: 3000,
         seed: 5,
@@ -381,9 +385,11 @@ fn ray_buffers_match_the_host_for_closest_and_any_hits() {
         check_host("cpu-brute", &brute, &rays, question, &triangles),
         check_host("cpu-bvh", &flat, &rays, question, &triangles),
     ];
-    results.extend(check_every_device(
-        &device, &mesh, &rays, question, &triangles,
-    ));
+    for device in devices() {
+        results.extend(check_every_device(
+            device, &mesh, &rays, question, &triangles,
+        ));
+    }
     for hits in results {
         let hits = hits.unwrap_or_else(|e| panic!("{e}"));
         assert!(
@@ -398,7 +404,6 @@ fn ray_buffers_match_the_host_for_closest_and_any_hits() {
 /// force finds, here the edges of nested boxes grazed along their faces.
 #[test]
 fn rays_along_box_faces_match_brute_force() {
-    let device = device();
     let mesh = generate(Generator::NestedBoxes { count: 3 });
     let triangles = in_file_order(&mesh);
     // Every vertex coordinate value, so rays run exactly in the planes of the boxes' faces.
@@ -425,9 +430,11 @@ fn rays_along_box_faces_match_brute_force() {
     let question = (f32::INFINITY, Ties::Allowed);
     let flat = Bin32Bvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
     let mut results = vec![check_host("cpu-bvh", &flat, &rays, question, &triangles)];
-    results.extend(check_every_device(
-        &device, &mesh, &rays, question, &triangles,
-    ));
+    for device in devices() {
+        results.extend(check_every_device(
+            device, &mesh, &rays, question, &triangles,
+        ));
+    }
     for hits in results {
         let hits = hits.unwrap_or_else(|e| panic!("{e}"));
         assert!(hits > rays.len() / 4, "{hits} of {} rays hit", rays.len());

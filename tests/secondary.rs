@@ -1,6 +1,7 @@
 //! The progressive shade modes: ambient occlusion on an open plane and inside a closed box,
 //! the white furnace for the path tracer, the OpenCL path tracer against the host's, the
-//! same seed giving the same bytes, and Ctrl-C writing what has accumulated.
+//! same seed giving the same bytes (the OpenCL parts on every device), and Ctrl-C writing
+//! what has accumulated.
 
 use std::sync::atomic::AtomicBool;
 
@@ -118,103 +119,106 @@ fn quad_mesh(corners: [[f32; 3]; 4]) -> Mesh {
 
 #[test]
 fn ambient_occlusion_is_one_on_an_open_plane() {
-    let device = device();
-    // A plane much larger than the view, seen from just above: every ray lands on it.
-    let plane = quad_mesh([
-        [-50.0, 0.0, -50.0],
-        [50.0, 0.0, -50.0],
-        [50.0, 0.0, 50.0],
-        [-50.0, 0.0, 50.0],
-    ]);
-    let cam = camera(&plane, [0.2, 1.0, 0.5], [0.0, 0.0, 0.0], 50.0, (24, 16));
-    for (method, device) in methods(&device) {
-        let acc = accumulate(
-            method,
-            device,
-            (&plane, &Materials::default()),
-            &cam,
-            Lighting::Ao {
-                samples: 16,
-                distance: 10.0,
-            },
-            2,
-            1,
-        );
-        let values: Vec<f32> = acc.radiance().iter().map(|p| p[0]).collect();
-        assert!(
-            values.iter().all(|&v| v == 1.0),
-            "{method:?}: occlusion on an open plane: {:?}",
-            values.iter().find(|&&v| v != 1.0)
-        );
-    }
+    on_every_device(|device| {
+        // A plane much larger than the view, seen from just above: every ray lands on it.
+        let plane = quad_mesh([
+            [-50.0, 0.0, -50.0],
+            [50.0, 0.0, -50.0],
+            [50.0, 0.0, 50.0],
+            [-50.0, 0.0, 50.0],
+        ]);
+        let cam = camera(&plane, [0.2, 1.0, 0.5], [0.0, 0.0, 0.0], 50.0, (24, 16));
+        for (method, device) in methods(device) {
+            let acc = accumulate(
+                method,
+                device,
+                (&plane, &Materials::default()),
+                &cam,
+                Lighting::Ao {
+                    samples: 16,
+                    distance: 10.0,
+                },
+                2,
+                1,
+            );
+            let values: Vec<f32> = acc.radiance().iter().map(|p| p[0]).collect();
+            assert!(
+                values.iter().all(|&v| v == 1.0),
+                "{method:?}: occlusion on an open plane: {:?}",
+                values.iter().find(|&&v| v != 1.0)
+            );
+        }
+    });
 }
 
 #[test]
 fn ambient_occlusion_is_zero_inside_a_closed_box() {
-    let device = device();
-    let cube = generate(Generator::Cube {});
-    let cam = camera(&cube, [0.3, -0.2, 0.1], [1.0, 0.5, -1.0], 90.0, (24, 16));
-    for (method, device) in methods(&device) {
-        let acc = accumulate(
-            method,
-            device,
-            (&cube, &Materials::default()),
-            &cam,
-            Lighting::Ao {
-                samples: 32,
-                distance: 100.0,
-            },
-            2,
-            3,
-        );
-        assert!(
-            acc.pixels.iter().all(|p| p[3] == 2.0),
-            "{method:?}: every pixel has its samples"
-        );
-        let open = acc.radiance().iter().filter(|p| p[0] != 0.0).count();
-        assert_eq!(
-            open, 0,
-            "{method:?}: {open} pixels see past the walls of a closed box"
-        );
-    }
+    on_every_device(|device| {
+        let cube = generate(Generator::Cube {});
+        let cam = camera(&cube, [0.3, -0.2, 0.1], [1.0, 0.5, -1.0], 90.0, (24, 16));
+        for (method, device) in methods(device) {
+            let acc = accumulate(
+                method,
+                device,
+                (&cube, &Materials::default()),
+                &cam,
+                Lighting::Ao {
+                    samples: 32,
+                    distance: 100.0,
+                },
+                2,
+                3,
+            );
+            assert!(
+                acc.pixels.iter().all(|p| p[3] == 2.0),
+                "{method:?}: every pixel has its samples"
+            );
+            let open = acc.radiance().iter().filter(|p| p[0] != 0.0).count();
+            assert_eq!(
+                open, 0,
+                "{method:?}: {open} pixels see past the walls of a closed box"
+            );
+        }
+    });
 }
 
 /// A closed sphere seen from inside, albedo a and emission E everywhere: radiance E / (1 - a).
 #[test]
 fn white_furnace_radiance_is_emission_over_one_minus_albedo() {
-    let device = device();
-    let sphere = generate(Generator::Sphere { subdivisions: 2 });
-    let (albedo, emission) = (0.6f32, 0.5f32);
-    let materials = Materials::uniform(Material::emitting([albedo; 3], [emission; 3]));
-    let cam = camera(
-        &sphere,
-        [0.1, 0.05, -0.1],
-        [0.0, 0.0, -1.0],
-        100.0,
-        (32, 24),
-    );
-    let expected = emission / (1.0 - albedo);
-    for (method, device) in [(Method::CpuBvh, None), (Method::ClBvh, Some(&device))] {
-        let acc = accumulate(
-            method,
-            device,
-            (&sphere, &materials),
-            &cam,
-            Lighting::Path { max_bounces: 200 },
-            16,
-            7,
+    on_every_device(|device| {
+        let sphere = generate(Generator::Sphere { subdivisions: 2 });
+        let (albedo, emission) = (0.6f32, 0.5f32);
+        let materials = Materials::uniform(Material::emitting([albedo; 3], [emission; 3]));
+        let cam = camera(
+            &sphere,
+            [0.1, 0.05, -0.1],
+            [0.0, 0.0, -1.0],
+            100.0,
+            (32, 24),
         );
-        let values: Vec<f64> = acc.radiance().iter().map(|p| p[1] as f64).collect();
-        let n = values.len() as f64;
-        let mean = values.iter().sum::<f64>() / n;
-        let sd = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-        let bound = 4.0 * sd / n.sqrt() + 1e-3;
-        eprintln!("{method:?}: mean {mean:.4} (expected {expected}), +-{bound:.4}");
-        assert!(
-            (mean - expected as f64).abs() < bound,
-            "{method:?}: mean {mean}, expected {expected} +- {bound}"
-        );
-    }
+        let expected = emission / (1.0 - albedo);
+        for (method, device) in [(Method::CpuBvh, None), (Method::ClBvh, Some(device))] {
+            let acc = accumulate(
+                method,
+                device,
+                (&sphere, &materials),
+                &cam,
+                Lighting::Path { max_bounces: 200 },
+                16,
+                7,
+            );
+            let values: Vec<f64> = acc.radiance().iter().map(|p| p[1] as f64).collect();
+            let n = values.len() as f64;
+            let mean = values.iter().sum::<f64>() / n;
+            let sd = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+            let bound = 4.0 * sd / n.sqrt() + 1e-3;
+            eprintln!("{method:?}: mean {mean:.4} (expected {expected}), +-{bound:.4}");
+            assert!(
+                (mean - expected as f64).abs() < bound,
+                "{method:?}: mean {mean}, expected {expected} +- {bound}"
+            );
+        }
+    });
 }
 
 /// A small closed room lit by a ceiling panel, with a box inside.
@@ -252,139 +256,142 @@ fn lit_room() -> (Mesh, Materials) {
 
 #[test]
 fn opencl_path_tracer_matches_the_host_path_tracer() {
-    let device = device();
-    let (room, materials) = lit_room();
-    assert!(materials.has_emitters());
-    let cam = camera(&room, [0.0, 0.0, 0.9], [0.0, -0.2, 0.0], 70.0, (32, 24));
-    let lighting = Lighting::Path { max_bounces: 6 };
-    let host = accumulate(
-        Method::CpuBvh,
-        None,
-        (&room, &materials),
-        &cam,
-        lighting,
-        64,
-        11,
-    )
-    .radiance();
-    let dev = accumulate(
-        Method::ClBvh,
-        Some(&device),
-        (&room, &materials),
-        &cam,
-        lighting,
-        64,
-        11,
-    )
-    .radiance();
-    // The same random streams: most pixels agree to rounding; where the device's sin and
-    // cos send a path elsewhere they differ by noise. Image means within 2%, and 4x4 blocks
-    // within 10%.
-    let mean = |img: &[[f32; 3]], c: usize| {
-        img.iter().map(|p| p[c] as f64).sum::<f64>() / img.len() as f64
-    };
-    for c in 0..3 {
-        let (h, d) = (mean(&host, c), mean(&dev, c));
-        assert!(h > 0.05, "channel {c}: the room is dark ({h})");
-        assert!(
-            (h - d).abs() <= 0.02 * h,
-            "channel {c}: host mean {h}, device mean {d}"
-        );
-    }
-    for by in 0..6 {
-        for bx in 0..8 {
-            let block = |img: &[[f32; 3]]| {
-                let mut s = 0.0;
-                for y in by * 4..by * 4 + 4 {
-                    for x in bx * 4..bx * 4 + 4 {
-                        s += img[y * 32 + x].iter().sum::<f32>() as f64;
-                    }
-                }
-                s
-            };
-            let (h, d) = (block(&host), block(&dev));
+    on_every_device(|device| {
+        let (room, materials) = lit_room();
+        assert!(materials.has_emitters());
+        let cam = camera(&room, [0.0, 0.0, 0.9], [0.0, -0.2, 0.0], 70.0, (32, 24));
+        let lighting = Lighting::Path { max_bounces: 6 };
+        let host = accumulate(
+            Method::CpuBvh,
+            None,
+            (&room, &materials),
+            &cam,
+            lighting,
+            64,
+            11,
+        )
+        .radiance();
+        let dev = accumulate(
+            Method::ClBvh,
+            Some(device),
+            (&room, &materials),
+            &cam,
+            lighting,
+            64,
+            11,
+        )
+        .radiance();
+        // The same random streams: most pixels agree to rounding; where the device's sin and
+        // cos send a path elsewhere they differ by noise. Image means within 2%, and 4x4 blocks
+        // within 10%.
+        let mean = |img: &[[f32; 3]], c: usize| {
+            img.iter().map(|p| p[c] as f64).sum::<f64>() / img.len() as f64
+        };
+        for c in 0..3 {
+            let (h, d) = (mean(&host, c), mean(&dev, c));
+            assert!(h > 0.05, "channel {c}: the room is dark ({h})");
             assert!(
-                (h - d).abs() <= 0.1 * h.max(d) + 1e-3,
-                "block ({bx}, {by}): host {h}, device {d}"
+                (h - d).abs() <= 0.02 * h,
+                "channel {c}: host mean {h}, device mean {d}"
             );
         }
-    }
+        for by in 0..6 {
+            for bx in 0..8 {
+                let block = |img: &[[f32; 3]]| {
+                    let mut s = 0.0;
+                    for y in by * 4..by * 4 + 4 {
+                        for x in bx * 4..bx * 4 + 4 {
+                            s += img[y * 32 + x].iter().sum::<f32>() as f64;
+                        }
+                    }
+                    s
+                };
+                let (h, d) = (block(&host), block(&dev));
+                assert!(
+                    (h - d).abs() <= 0.1 * h.max(d) + 1e-3,
+                    "block ({bx}, {by}): host {h}, device {d}"
+                );
+            }
+        }
+    });
 }
 
 #[test]
 fn brute_force_and_every_bvh_layout_give_the_same_samples() {
-    let device = device();
-    let (room, materials) = lit_room();
-    let cam = camera(&room, [0.0, 0.0, 0.9], [0.0, -0.2, 0.0], 70.0, (24, 16));
-    for lighting in [
-        Lighting::Ao {
-            samples: 8,
-            distance: 0.5,
-        },
-        Lighting::Path { max_bounces: 4 },
-    ] {
-        let brute = accumulate(
-            Method::ClBrute,
-            Some(&device),
-            (&room, &materials),
-            &cam,
-            lighting,
-            4,
-            5,
-        );
-        // Layouts that reorder the triangles must keep the emitters' indices right.
-        for layout in Layout::ALL {
-            let bvh = accumulate_with(
-                Method::ClBvh,
-                layout,
-                Some(&device),
+    on_every_device(|device| {
+        let (room, materials) = lit_room();
+        let cam = camera(&room, [0.0, 0.0, 0.9], [0.0, -0.2, 0.0], 70.0, (24, 16));
+        for lighting in [
+            Lighting::Ao {
+                samples: 8,
+                distance: 0.5,
+            },
+            Lighting::Path { max_bounces: 4 },
+        ] {
+            let brute = accumulate(
+                Method::ClBrute,
+                Some(device),
                 (&room, &materials),
                 &cam,
                 lighting,
                 4,
                 5,
             );
-            let differing = (bvh.pixels.iter().zip(&brute.pixels))
-                .filter(|(a, b)| a != b)
-                .count();
-            assert_eq!(
-                differing,
-                0,
-                "{lighting:?}, {}: pixels differ",
-                layout.name()
-            );
+            // Layouts that reorder the triangles must keep the emitters' indices right.
+            for layout in Layout::ALL {
+                let bvh = accumulate_with(
+                    Method::ClBvh,
+                    layout,
+                    Some(device),
+                    (&room, &materials),
+                    &cam,
+                    lighting,
+                    4,
+                    5,
+                );
+                let differing = (bvh.pixels.iter().zip(&brute.pixels))
+                    .filter(|(a, b)| a != b)
+                    .count();
+                assert_eq!(
+                    differing,
+                    0,
+                    "{lighting:?}, {}: pixels differ",
+                    layout.name()
+                );
+            }
         }
-    }
+    });
 }
 
 #[test]
 fn the_same_seed_gives_the_same_bytes() {
-    let device = device();
-    let (room, materials) = lit_room();
-    let cam = camera(&room, [0.0, 0.0, 0.9], [0.0, -0.2, 0.0], 70.0, (24, 16));
-    let lighting = Lighting::Path { max_bounces: 8 };
-    let run = |seed| {
-        accumulate(
-            Method::ClBvh,
-            Some(&device),
-            (&room, &materials),
-            &cam,
-            lighting,
-            8,
-            seed,
-        )
-    };
-    let (a, b, c) = (run(42), run(42), run(43));
-    let bytes = |acc: &Accumulation| {
-        acc.pixels
-            .iter()
-            .flatten()
-            .flat_map(|v| v.to_le_bytes())
-            .collect::<Vec<u8>>()
-    };
-    assert_eq!(bytes(&a), bytes(&b), "the same seed twice");
-    assert_ne!(bytes(&a), bytes(&c), "another seed");
-    assert_eq!(a.rays, b.rays);
+    on_every_device(|device| {
+        let (room, materials) = lit_room();
+        let cam = camera(&room, [0.0, 0.0, 0.9], [0.0, -0.2, 0.0], 70.0, (24, 16));
+        let lighting = Lighting::Path { max_bounces: 8 };
+        let run = |seed| {
+            accumulate(
+                Method::ClBvh,
+                Some(device),
+                (&room, &materials),
+                &cam,
+                lighting,
+                8,
+                seed,
+            )
+        };
+        let (a, b, c) = (run(42), run(42), run(43));
+        let bytes = |acc: &Accumulation| {
+            acc.pixels
+                .iter()
+                .flatten()
+                .flat_map(|v| v.to_le_bytes())
+                .collect::<Vec<u8>>()
+        };
+        assert_eq!(bytes(&a), bytes(&b), "the same seed twice");
+        assert_ne!(bytes(&a), bytes(&c), "another seed");
+        assert_eq!(a.rays, b.rays);
+    });
 }
 
 #[test]

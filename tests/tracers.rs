@@ -30,8 +30,9 @@ fn bin32_bvh_hits_equal_brute_force_under_every_builder_setting() {
 
 #[test]
 fn every_opencl_tracer_hits_like_brute_force() {
-    let device = device();
-    for tracer in DeviceTracer::all() {
-        device_agrees_with_brute_force(&device, tracer);
-    }
+    on_every_device(|device| {
+        for tracer in DeviceTracer::all() {
+            device_agrees_with_brute_force(device, tracer);
+        }
+    });
 }

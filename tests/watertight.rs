@@ -7,16 +7,15 @@
 //! than the point: a miss means it slipped between two triangles. (Rays that only touch
 //! the surface there, at a silhouette, are left out, unless they meet the seam exactly:
 //! see `Seam::crossed_by`.) Checked on every tracer: on the CPU each implementation of
-//! `ClosestHit` (brute force and BVH), on the OpenCL device the brute-force kernels and the
-//! BVH kernels of every layout; and, so that the test can fail, a Möller–Trumbore test with
-//! strict inequalities must let some of the same rays through.
+//! `ClosestHit` (brute force and BVH), on every OpenCL device the brute-force kernels and
+//! the BVH kernels of every layout; and, so that the test can fail, a Möller–Trumbore test
+//! with strict inequalities must let some of the same rays through.
 
 use std::collections::HashMap;
 
 use cltrace::brute::BruteForce;
 use cltrace::bvh::Bin32Bvh;
 use cltrace::bvh::{BuildOptions, Bvh};
-use cltrace::device::ClDevice;
 use cltrace::device::tracer::ClTracer;
 use cltrace::geometry::Ray;
 use cltrace::input::generate::Generator;
@@ -388,7 +387,6 @@ fn strict_moller_trumbore(ray: &Ray, tri: &Triangle, t_max: f32) -> bool {
 
 #[test]
 fn rays_through_seams_never_slip_between_triangles() {
-    let device: ClDevice = common::device();
     let mut failures = Vec::new();
     for c in cases() {
         let n = c.mesh.triangle_count() as u32;
@@ -400,9 +398,12 @@ fn rays_through_seams_never_slip_between_triangles() {
             ("cpu-brute".to_string(), cpu_misses(&brute, &c.rays)),
             ("cpu-bvh".to_string(), cpu_misses(&flat, &c.rays)),
         ];
-        for tracer in DeviceTracer::all() {
-            let mut cl = tracer.prepare(&device, &c.mesh, &BuildOptions::default());
-            results.push((tracer.name(), device_misses(&mut cl, &c.rays)));
+        for device in common::devices() {
+            for tracer in DeviceTracer::all() {
+                let mut cl = tracer.prepare(device, &c.mesh, &BuildOptions::default());
+                let name = format!("{} on {}", tracer.name(), common::label(&device.info));
+                results.push((name, device_misses(&mut cl, &c.rays)));
+            }
         }
         for (tracer, (closest, any)) in results {
             eprintln!(

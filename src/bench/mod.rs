@@ -195,6 +195,7 @@ struct BenchScene {
 }
 
 /// Where a method runs: the host, or an OpenCL device.
+// The device boxed: an opened device (with its program cache) is far larger than `Host`.
 enum Target {
     Host,
     Device(Box<ClDevice>),

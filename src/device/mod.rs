@@ -111,6 +111,12 @@ impl DeviceInfo {
         format!("{}:{}", self.platform_index, self.device_index)
     }
 
+    /// `CL_PLATFORM_NAME` of the device's platform, trimmed: which OpenCL implementation
+    /// drives it ("Portable Computing Language", "Intel(R) OpenCL", ...).
+    pub fn platform_name(&self) -> &str {
+        &self.platform_name
+    }
+
     /// What identifies the device across runs (and cache files): platform, name, driver.
     pub fn key(&self) -> String {
         format!(
@@ -340,6 +346,9 @@ pub struct ClDevice {
     pub(crate) context: ocl::Context,
     /// The in-order, profiling queue every command of this device goes to.
     pub queue: ocl::Queue,
+    /// Programs built in this context, by build options and source: a second build of the
+    /// same program is taken from here ([`ClDevice::build_source`]).
+    pub(crate) programs: std::sync::Mutex<program::BuiltPrograms>,
     /// Where compiled tracing programs are kept between runs; `None` compiles every time.
     pub(crate) program_cache: Option<program_cache::ProgramCache>,
 }
@@ -374,6 +383,7 @@ impl ClDevice {
             info,
             context,
             queue,
+            programs: Default::default(),
             program_cache: None,
         })
     }

@@ -202,6 +202,9 @@ fn program_source(files: &[String]) -> String {
     source
 }
 
+/// Built programs by (build options, source).
+pub(crate) type BuiltPrograms = std::collections::HashMap<(String, String), ocl::Program>;
+
 /// A compiled tracing program and what it was compiled for: the BVH layout its kernels
 /// traverse (`None`: every triangle), and whether it holds the sampling kernels. A tracer
 /// refuses a program compiled for another scene.
@@ -373,8 +376,25 @@ impl ClDevice {
     }
 
     /// Compiles arbitrary source; `name` labels errors. A failed build reports the device's
-    /// build log.
+    /// build log. The same source with the same options is compiled once per opened device:
+    /// not every driver keeps a kernel cache of its own (PoCL does, Intel's CPU runtime does
+    /// not, and takes seconds a build), and the tests and `cltrace bench` build the same
+    /// program many times.
     pub fn build_source(&self, name: &str, source: &str, options: &str) -> Result<ocl::Program> {
+        let key = (options.to_string(), source.to_string());
+        if let Some(program) = self.built_programs().get(&key) {
+            return Ok(program.clone());
+        }
+        let program = self.build_uncached(name, source, options)?;
+        self.built_programs().insert(key, program.clone());
+        Ok(program)
+    }
+
+    fn built_programs(&self) -> std::sync::MutexGuard<'_, BuiltPrograms> {
+        self.programs.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    fn build_uncached(&self, name: &str, source: &str, options: &str) -> Result<ocl::Program> {
         let fail = |e: ocl::core::Error| {
             Error::Device(format!(
                 "cannot compile {name} for {}: {}",

@@ -6,12 +6,14 @@
 pub mod command;
 pub mod tracers;
 
+use std::panic::AssertUnwindSafe;
 use std::path::PathBuf;
+use std::sync::OnceLock;
 
 use cltrace::brute::BruteForce;
 use cltrace::bvh::{BuildOptions, Builder};
 use cltrace::camera::{Camera, Pinhole};
-use cltrace::device::{ClDevice, DeviceSelector};
+use cltrace::device::{ClDevice, DeviceInfo, DeviceSelector, list_devices};
 use cltrace::geometry::Ray;
 use cltrace::input::generate::Generator;
 use cltrace::input::load_mesh;
@@ -23,10 +25,85 @@ use cltrace::render::Frame;
 use glam::Vec3;
 use proptest::prelude::*;
 
-/// The device the OpenCL tests run on: `CLTRACE_DEVICE` if set, else the default (PoCL in CI).
+/// The device the single-device OpenCL tests run on: `CLTRACE_DEVICE` if set, else the
+/// default (in CI, PoCL or Intel's CPU runtime, whichever the loader lists first).
 pub fn device() -> ClDevice {
     let selector = DeviceSelector::from_flag_or_env(None).expect("valid CLTRACE_DEVICE");
     ClDevice::select(&selector).unwrap_or_else(|e| panic!("the OpenCL tests need a device: {e}"))
+}
+
+/// The OpenCL implementations CI holds every kernel to: what to call each, its platform's
+/// name, and the script that installs it.
+const IMPLEMENTATIONS: [(&str, &str, &str); 2] = [
+    (
+        "PoCL",
+        "Portable Computing Language",
+        "scripts/setup-debian.sh",
+    ),
+    (
+        "Intel's OpenCL CPU runtime",
+        "Intel(R) OpenCL",
+        "scripts/setup-intel-opencl.sh",
+    ),
+];
+
+/// Every OpenCL device found, opened once for the whole test binary, so that a program is
+/// compiled once per device (Intel's runtime takes seconds a build and keeps no cache of
+/// its own). Where PoCL or Intel's runtime is missing, a notice says so and its device is
+/// not tested, except in CI (`CI` set), which installs both and fails without either.
+pub fn devices() -> &'static [ClDevice] {
+    static DEVICES: OnceLock<Vec<ClDevice>> = OnceLock::new();
+    DEVICES.get_or_init(|| {
+        let found = list_devices().unwrap_or_default();
+        for (what, platform, script) in IMPLEMENTATIONS {
+            if !found.iter().any(|d| d.platform_name() == platform) {
+                assert!(
+                    std::env::var_os("CI").is_none(),
+                    "CI must test the kernels on {what} (platform \"{platform}\"): install it \
+                     with {script}"
+                );
+                eprintln!(
+                    "notice: {what} is not installed ({script} installs it): the kernels are \
+                     not tested on it"
+                );
+            }
+        }
+        assert!(!found.is_empty(), "the OpenCL tests need a device");
+        found
+            .iter()
+            .map(|d| {
+                let selector = d.index().parse().expect("an index is a selector");
+                ClDevice::select(&selector).unwrap_or_else(|e| panic!("{}: {e}", label(d)))
+            })
+            .collect()
+    })
+}
+
+/// A device as failure messages name it: its index, name and platform.
+pub fn label(device: &DeviceInfo) -> String {
+    format!(
+        "{} {} ({})",
+        device.index(),
+        device.name,
+        device.platform_name()
+    )
+}
+
+/// Runs `check` on every device ([`devices`]), each to its end even when another fails;
+/// then fails with every device's failure, each named after its device.
+pub fn on_every_device(check: impl Fn(&'static ClDevice)) {
+    let mut failures = Vec::new();
+    for device in devices() {
+        if let Err(panic) = std::panic::catch_unwind(AssertUnwindSafe(|| check(device))) {
+            let message = panic
+                .downcast_ref::<String>()
+                .map(String::as_str)
+                .or_else(|| panic.downcast_ref::<&str>().copied())
+                .unwrap_or("(a panic without a message)");
+            failures.push(format!("on {}: {message}", label(&device.info)));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
 pub fn generate(g: Generator) -> Mesh {

@@ -9,7 +9,7 @@ use cltrace::geometry::Ray;
 use cltrace::intersect::{ClosestHit, Triangle, triangles_in_order};
 use cltrace::mesh::Mesh;
 
-use super::{TIE, collinear, copies, hit_distance, rays_for, same_hits, test_scenes};
+use super::{TIE, collinear, copies, hit_distance, label, rays_for, same_hits, test_scenes};
 use glam::Vec3;
 
 /// One of the OpenCL tracers.
@@ -255,8 +255,8 @@ pub fn agrees_with_brute_force<T: ClosestHit>(what: &str, make: impl Fn(&Mesh) -
     }
 }
 
-/// [`check_device`] on every device tracer ([`DeviceTracer::all`]) of `mesh`, each named
-/// after its tracer.
+/// [`check_device`] on every device tracer ([`DeviceTracer::all`]) of `mesh` on `device`,
+/// each named after its tracer and the device.
 pub fn check_every_device(
     device: &ClDevice,
     mesh: &Mesh,
@@ -268,7 +268,8 @@ pub fn check_every_device(
         .into_iter()
         .map(|tracer| {
             let mut cl = tracer.prepare(device, mesh, &BuildOptions::default());
-            check_device(&tracer.name(), &mut cl, rays, question, triangles)
+            let what = format!("{} on {}", tracer.name(), label(&device.info));
+            check_device(&what, &mut cl, rays, question, triangles)
         })
         .collect()
 }
