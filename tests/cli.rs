@@ -671,13 +671,18 @@ fn an_output_that_is_a_named_pipe_is_written_into() {
         eprintln!("notice: mkfifo is missing: the named-pipe output is not tested");
         return;
     }
-    let reader = {
+    // The reader blocks until a writer opens the pipe: one renamed over it never comes,
+    // so the wait has a limit instead of hanging the test.
+    let (send, receive) = std::sync::mpsc::channel();
+    {
         let fifo = fifo.clone();
-        std::thread::spawn(move || std::fs::read(fifo).unwrap())
-    };
+        std::thread::spawn(move || send.send(std::fs::read(fifo).unwrap()));
+    }
     let out = run(cltrace(&w.input, &render_args(&quad, &fifo, "cpu-bvh")));
     succeeded(&out);
-    let bytes = reader.join().unwrap();
+    let bytes = receive
+        .recv_timeout(std::time::Duration::from_secs(60))
+        .expect("nothing was written into the pipe");
     let header = format!("P6\n{WIDTH} {HEIGHT}\n255\n");
     assert!(bytes.starts_with(header.as_bytes()));
     assert_eq!(bytes.len(), header.len() + 3 * (WIDTH * HEIGHT) as usize);

@@ -202,6 +202,15 @@ fn program_source(files: &[String]) -> String {
     source
 }
 
+/// Serialises program builds within the process. Intel's OpenCL CPU runtime (2026.2) hung
+/// for good, a core busy in its LLVM's `StripDebugInfo`, when two threads of the test
+/// binary built programs at once; one build at a time costs a renderer nothing (it builds
+/// one program) and the tests little.
+fn one_build_at_a_time() -> std::sync::MutexGuard<'static, ()> {
+    static BUILDS: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    BUILDS.lock().unwrap_or_else(|p| p.into_inner())
+}
+
 /// Built programs by (build options, source).
 pub(crate) type BuiltPrograms = std::collections::HashMap<(String, String), ocl::Program>;
 
@@ -308,6 +317,7 @@ impl ClDevice {
     /// A program from a binary this device compiled before; `Err` with the reason when
     /// the driver refuses it (a driver update it did not announce, a damaged binary).
     fn build_binary(&self, binary: &[u8], options: &str) -> Result<ocl::Program, String> {
+        let _one_at_a_time = one_build_at_a_time();
         // By value: ocl-core passes the slice to OpenCL as an array of `cl_device_id`, so a
         // slice of references would hand it pointers to the wrappers (a driver crash).
         let device: ocl::core::DeviceId = *self.info.device.as_core();
@@ -395,6 +405,7 @@ impl ClDevice {
     }
 
     fn build_uncached(&self, name: &str, source: &str, options: &str) -> Result<ocl::Program> {
+        let _one_at_a_time = one_build_at_a_time();
         let fail = |e: ocl::core::Error| {
             Error::Device(format!(
                 "cannot compile {name} for {}: {}",
