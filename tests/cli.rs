@@ -150,6 +150,32 @@ fn render_png_on_the_cpu() {
     assert_eq!(w.out_entries(), ["out.png"]);
 }
 
+/// Regression: `--layout`'s help claimed a default of `bin32`; it names the layout an
+/// untuned device gets, by kind, as the render picks it.
+#[test]
+fn layout_help_claimed_a_default_of_bin32() {
+    use cltrace::device::DeviceKind;
+    let w = Work::new();
+    let out = run(cltrace(&w.input, &["render", "--help"]));
+    succeeded(&out);
+    let help = text(&out.stdout);
+    let text: String = help
+        .lines()
+        .skip_while(|l| !l.contains("--layout"))
+        .take(3)
+        .collect::<Vec<_>>()
+        .join(" ");
+    let (cpu, other) = (
+        DeviceKind::Cpu.default_layout().name(),
+        DeviceKind::Gpu.default_layout().name(),
+    );
+    assert!(
+        text.contains(&format!("{cpu} on CPUs and {other} on other devices")),
+        "{text}"
+    );
+    assert!(!text.contains("default: bin32"), "{text}");
+}
+
 /// Regression: `render --help` listed the 8-bit formats only; it names every format the
 /// extension can choose.
 #[test]
