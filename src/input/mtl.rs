@@ -46,20 +46,23 @@ const COLOURS: [&[u8]; 4] = [b"Ka", b"Kd", b"Ks", b"Ke"];
 
 /// The library with every colour given as three numbers. MTL lets `g` and `b` be left
 /// out (they then equal `r`: `Kd 0.5` is grey), but tobj panics on fewer than three; a
-/// colour line with no value at all is dropped, as if it were not there.
+/// colour line with no value at all is dropped, as if it were not there. Words are split
+/// as tobj splits them, at any Unicode whitespace (a vertical tab too): a colour this
+/// missed would reach tobj's panic. A line that is not UTF-8 is kept, for tobj to refuse.
 fn complete_colours(bytes: &[u8]) -> Vec<u8> {
     let mut out = Vec::with_capacity(bytes.len() + 64);
     for line in bytes.split_inclusive(|&b| b == b'\n') {
-        let words: Vec<&[u8]> = line
-            .split(|b| b.is_ascii_whitespace())
-            .filter(|w| !w.is_empty())
-            .collect();
+        let Ok(text) = std::str::from_utf8(line) else {
+            out.extend_from_slice(line);
+            continue;
+        };
+        let words: Vec<&str> = text.split_whitespace().collect();
         match words.as_slice() {
-            [key, values @ ..] if COLOURS.contains(key) && values.len() < 3 => {
+            [key, values @ ..] if COLOURS.contains(&key.as_bytes()) && values.len() < 3 => {
                 if let Some(&r) = values.first() {
                     let mut padded = words.clone();
                     padded.extend(std::iter::repeat_n(r, 3 - values.len()));
-                    out.extend_from_slice(&padded.join(&b' '));
+                    out.extend_from_slice(padded.join(" ").as_bytes());
                     out.push(b'\n');
                 }
             }
