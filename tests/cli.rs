@@ -150,21 +150,25 @@ fn render_png_on_the_cpu() {
     assert_eq!(w.out_entries(), ["out.png"]);
 }
 
+/// The first three lines of `render --help` from the one naming `flag`, joined.
+fn render_help_of(flag: &str) -> String {
+    let w = Work::new();
+    let out = run(cltrace(&w.input, &["render", "--help"]));
+    succeeded(&out);
+    text(&out.stdout)
+        .lines()
+        .skip_while(|l| !l.contains(flag))
+        .take(3)
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
 /// Regression: `--layout`'s help claimed a default of `bin32`; it names the layout an
 /// untuned device gets, by kind, as the render picks it.
 #[test]
 fn layout_help_claimed_a_default_of_bin32() {
     use cltrace::device::DeviceKind;
-    let w = Work::new();
-    let out = run(cltrace(&w.input, &["render", "--help"]));
-    succeeded(&out);
-    let help = text(&out.stdout);
-    let text: String = help
-        .lines()
-        .skip_while(|l| !l.contains("--layout"))
-        .take(3)
-        .collect::<Vec<_>>()
-        .join(" ");
+    let text = render_help_of("--layout");
     let (cpu, other) = (
         DeviceKind::Cpu.default_layout().name(),
         DeviceKind::Gpu.default_layout().name(),
@@ -180,16 +184,7 @@ fn layout_help_claimed_a_default_of_bin32() {
 /// extension can choose.
 #[test]
 fn render_help_names_every_output_format() {
-    let w = Work::new();
-    let out = run(cltrace(&w.input, &["render", "--help"]));
-    succeeded(&out);
-    let help = text(&out.stdout);
-    let line = help
-        .lines()
-        .skip_while(|l| !l.contains("--output"))
-        .take(3)
-        .collect::<Vec<_>>()
-        .join(" ");
+    let line = render_help_of("--output");
     for format in ["png", "bmp", "ppm", "jpg", "exr", "pfm"] {
         assert!(line.contains(format), "{format} missing from {line:?}");
     }

@@ -106,12 +106,7 @@ impl Entry {
 
     /// Saves `binary` under this entry, atomically (the folder is made if needed).
     pub(crate) fn store(&self, binary: &[u8]) -> Result<(), String> {
-        let mut bytes = MAGIC.to_vec();
-        for part in [&self.key[..], binary] {
-            bytes.extend_from_slice(&(part.len() as u64).to_le_bytes());
-            bytes.extend_from_slice(part);
-        }
-        bytes.extend_from_slice(&fnv1a(&bytes).to_le_bytes());
+        let bytes = encode(&self.key, binary);
         if let Some(folder) = self.path.parent() {
             std::fs::create_dir_all(folder).map_err(|e| e.to_string())?;
         }
@@ -122,6 +117,18 @@ impl Entry {
         })
         .map_err(|e| e.to_string())
     }
+}
+
+/// An entry's bytes: the magic line, the key and the binary (each after its length), then
+/// the checksum of all before it.
+fn encode(key: &[u8], binary: &[u8]) -> Vec<u8> {
+    let mut bytes = MAGIC.to_vec();
+    for part in [key, binary] {
+        bytes.extend_from_slice(&(part.len() as u64).to_le_bytes());
+        bytes.extend_from_slice(part);
+    }
+    bytes.extend_from_slice(&fnv1a(&bytes).to_le_bytes());
+    bytes
 }
 
 /// The binary of an entry's bytes, checked against `key` and the checksum.
@@ -166,19 +173,9 @@ fn fnv1a(bytes: &[u8]) -> u64 {
 mod tests {
     use super::*;
 
-    fn entry_bytes(key: &[u8], binary: &[u8]) -> Vec<u8> {
-        let mut bytes = MAGIC.to_vec();
-        for part in [key, binary] {
-            bytes.extend_from_slice(&(part.len() as u64).to_le_bytes());
-            bytes.extend_from_slice(part);
-        }
-        bytes.extend_from_slice(&fnv1a(&bytes).to_le_bytes());
-        bytes
-    }
-
     #[test]
     fn an_entry_reads_back_and_any_damage_is_refused() {
-        let bytes = entry_bytes(b"key", b"binary");
+        let bytes = encode(b"key", b"binary");
         assert_eq!(parse(&bytes, b"key").unwrap(), b"binary");
         assert!(parse(&bytes, b"other key").is_err());
         // Every truncation and every flipped byte is caught, never a panic.
@@ -190,6 +187,6 @@ mod tests {
             damaged[i] ^= 0x40;
             assert!(parse(&damaged, b"key").is_err(), "byte {i} flipped");
         }
-        assert!(parse(&entry_bytes(b"key", b""), b"key").is_err());
+        assert!(parse(&encode(b"key", b""), b"key").is_err());
     }
 }
