@@ -1,6 +1,7 @@
 /* integrator.cl: the progressive shade modes (ambient occlusion, a light with hard
  * shadows, diffuse path tracing), one sample per pixel per launch, added to a pitched
- * float4 accumulation image (radiance sums, and the sample count in w). Mirrored by
+ * long4 accumulation image (fixed-point radiance sums, and the sample count in w) over a
+ * region of the image. Mirrored by
  * src/render/integrator.rs, whence SHADOW_AMBIENT and ROULETTE_AFTER come. Compiled, like
  * trace.cl, against a BVH or every triangle, into programs built with sampling; the host
  * binds the parameters by name (src/device/tracer.rs; tests/layout.rs compares them). */
@@ -34,16 +35,25 @@ FORCE_INLINE float3 sky(float3 d) {
     __global const float* emitter_cdf, uint emitter_count, float emitter_area
 
 /* Every sample kernel takes the same arguments; each mode reads the ones it needs. The
- * launch covers rows [global offset, row_end); the accumulation image's row 0 is row0. */
+ * launch covers columns [col0, col_end) and rows [global offset, row_end); the
+ * accumulation image's pixel (0, 0) is image pixel (col0, row0). */
 #define SAMPLE_PARAMS SCENE_PARAMS, LIGHT_PARAMS, CAMERA_BAND_PARAMS, \
     float offset, uint seed, uint sample, \
     uint ao_samples, float ao_distance, float4 light, uint max_bounces, \
-    __global float4* accum, __global uint* rays, uint accum_pitch
+    __global long4* accum, __global uint* rays, uint accum_pitch, uint col0, uint col_end
 
-FORCE_INLINE void add_sample(__global float4* accum, __global uint* rays, uint accum_pitch,
+/* A radiance component as the sums take it: clamped (NaN to 0), then fixed-point. Integer
+ * sums are exact in any order, so split and merged renders equal one-shot ones. Mirrored by
+ * to_fixed in src/render/integrator.rs. */
+FORCE_INLINE long to_fixed(float v) {
+    v = v >= 0.0f ? fmin(v, MAX_SAMPLE_RADIANCE) : 0.0f;
+    return convert_long_rte(v * RADIANCE_SCALE);
+}
+
+FORCE_INLINE void add_sample(__global long4* accum, __global uint* rays, uint accum_pitch,
                        uint x, uint row, float3 radiance, uint ray_count) {
     uint i = row * accum_pitch + x;
-    accum[i] += (float4)(radiance, 1.0f);
+    accum[i] += (long4)(to_fixed(radiance.x), to_fixed(radiance.y), to_fixed(radiance.z), 1);
     rays[i] += ray_count;
 }
 
@@ -51,7 +61,7 @@ FORCE_INLINE void add_sample(__global float4* accum, __global uint* rays, uint a
  * band) and its stream of random numbers. */
 #define SAMPLE_PIXEL                                                     \
     uint x = get_global_id(0), y = get_global_id(1);                     \
-    if (x >= width || y < row0 || y >= row_end) return;                  \
+    if (x < col0 || x >= col_end || y < row0 || y >= row_end) return;   \
     uint key = sampler_key(seed, y * width + x, sample);
 
 /* SAMPLE_PIXEL, then the closest hit of the pixel's jittered camera ray: where the ambient
@@ -82,7 +92,7 @@ __kernel void sample_ao(SAMPLE_PARAMS) {
         count += ao_samples;
         radiance = (float3)((float)open / (float)max(ao_samples, 1u));
     }
-    add_sample(accum, rays, accum_pitch, x, y - row0, radiance, count);
+    add_sample(accum, rays, accum_pitch, x - col0, y - row0, radiance, count);
 }
 
 __kernel void sample_shadow(SAMPLE_PARAMS) {
@@ -104,7 +114,7 @@ __kernel void sample_shadow(SAMPLE_PARAMS) {
         }
         radiance = load3(m->albedo) * (SHADOW_AMBIENT + (1.0f - SHADOW_AMBIENT) * direct) + load3(m->emission);
     }
-    add_sample(accum, rays, accum_pitch, x, y - row0, radiance, count);
+    add_sample(accum, rays, accum_pitch, x - col0, y - row0, radiance, count);
 }
 
 /* The emitter whose CDF interval holds u. */
@@ -166,5 +176,5 @@ __kernel void sample_path(SAMPLE_PARAMS) {
         count += 1;
         hit = trace(SCENE, org, dir, INFINITY, false, true, &t);
     }
-    add_sample(accum, rays, accum_pitch, x, y - row0, radiance, count);
+    add_sample(accum, rays, accum_pitch, x - col0, y - row0, radiance, count);
 }

@@ -68,5 +68,7 @@ __kernel void probe_constants(__global uint* out) {
     out[i++] = DIMS_PER_BOUNCE;
     out[i++] = as_uint(SHADOW_AMBIENT);
     out[i++] = ROULETTE_AFTER;
+    out[i++] = as_uint(RADIANCE_SCALE);
+    out[i++] = as_uint(MAX_SAMPLE_RADIANCE);
     out[i++] = as_uint(ROBUST_EXIT);
 }

@@ -28,6 +28,7 @@
 // In layer order (see above); rustfmt keeps each group as it is.
 pub mod error;
 pub mod geometry;
+pub(crate) mod hash;
 
 pub mod camera;
 pub mod interrupt;

@@ -5,7 +5,7 @@ mod flags;
 
 use std::process::ExitCode;
 
-use cltrace::commands::{Ending, bench, bvh, devices, render, tune};
+use cltrace::commands::{Ending, bench, bvh, devices, merge, render, tune};
 use cltrace::interrupt::{self, Request};
 use cltrace::report::{print_data, print_message};
 use flags::Command;
@@ -26,6 +26,7 @@ fn main() -> ExitCode {
     };
     let result = match command {
         Command::Render(args) => render::render(&args.request()),
+        Command::Merge(args) => merge::merge(&args.request()),
         Command::Devices => devices::devices_table().map(|table| {
             print_data(&table);
             Ending::Complete

@@ -5,6 +5,8 @@
 //! and is not written at all; another special file (a named pipe) is written straight
 //! into, never renamed over.
 
+pub mod part;
+
 use std::io::{BufWriter, Write};
 use std::path::Path;
 

@@ -3,6 +3,8 @@
 //! frames, [`Renderer::render_samples`] accumulates the progressive shade modes and
 //! `Renderer::trace_rays` traces arbitrary rays.
 
+pub mod schedule;
+
 use std::sync::atomic::AtomicBool;
 
 use rayon::prelude::*;
@@ -76,21 +78,77 @@ impl<'d> Renderer<'d> {
         device: Option<&'d ClDevice>,
         timings: &mut Timings,
     ) -> Result<Self> {
-        let (build, sampling) = (&options.build, options.sampling);
-        let (flat, mut bvh) = if method.uses_bvh() {
-            let (bvh, stats) = timings.time("build", || {
-                let bvh = Bvh::build(mesh, build);
-                let stats = bvh.stats();
-                (bvh, stats)
-            });
-            let flat = timings.time("layout", || {
-                let mut flat = Bin32Bvh::new(bvh, mesh);
-                materials.assign(&mut flat.triangles);
-                flat
-            });
-            (Some(flat), Some(stats))
-        } else {
-            (None, None)
+        let built = Self::build(method, mesh, materials, &options.build, timings);
+        Self::prepare_built(method, mesh, materials, options, built, device, timings)
+    }
+
+    /// [`Renderer::prepare`] for each of several devices, the BVH built once: the
+    /// renderers of one frame split over devices ([`schedule`]). `options[i]` is for
+    /// `devices[i]`.
+    pub(crate) fn prepare_each(
+        method: Method,
+        mesh: &Mesh,
+        materials: &Materials,
+        options: &[PrepareOptions],
+        devices: &[&'d ClDevice],
+        timings: &mut Timings,
+    ) -> Result<Vec<Self>> {
+        let built = Self::build(method, mesh, materials, &options[0].build, timings);
+        devices
+            .iter()
+            .zip(options)
+            .map(|(device, options)| {
+                let built = built.clone();
+                Self::prepare_built(
+                    method,
+                    mesh,
+                    materials,
+                    options,
+                    built,
+                    Some(device),
+                    timings,
+                )
+            })
+            .collect()
+    }
+
+    /// The BVH in the thesis's layout, with its statistics, for the BVH methods.
+    fn build(
+        method: Method,
+        mesh: &Mesh,
+        materials: &Materials,
+        build: &BuildOptions,
+        timings: &mut Timings,
+    ) -> Option<(Bin32Bvh, BvhStats)> {
+        if !method.uses_bvh() {
+            return None;
+        }
+        let (bvh, stats) = timings.time("build", || {
+            let bvh = Bvh::build(mesh, build);
+            let stats = bvh.stats();
+            (bvh, stats)
+        });
+        let flat = timings.time("layout", || {
+            let mut flat = Bin32Bvh::new(bvh, mesh);
+            materials.assign(&mut flat.triangles);
+            flat
+        });
+        Some((flat, stats))
+    }
+
+    fn prepare_built(
+        method: Method,
+        mesh: &Mesh,
+        materials: &Materials,
+        options: &PrepareOptions,
+        built: Option<(Bin32Bvh, BvhStats)>,
+        device: Option<&'d ClDevice>,
+        timings: &mut Timings,
+    ) -> Result<Self> {
+        let sampling = options.sampling;
+        let (flat, mut bvh) = match built {
+            Some((flat, stats)) => (Some(flat), Some(stats)),
+            None => (None, None),
         };
         let all = || {
             let mut t = triangles_in_order(mesh, 0..mesh.triangle_count() as u32);
@@ -219,8 +277,8 @@ impl<'d> Renderer<'d> {
         Ok(traced)
     }
 
-    /// Adds samples `samples` of every pixel to `accumulation` (as large as the camera's
-    /// image), in the progressive mode `settings` names. `stop`, once set, ends the work
+    /// Adds samples `samples` of every pixel of `accumulation`'s region (of an image the
+    /// camera's size) to it, in the progressive mode `settings` names. `stop`, once set, ends the work
     /// early; each pixel keeps the samples it got. With `progress`, a bar shows samples
     /// and Mrays/s.
     pub fn render_samples(
@@ -265,7 +323,6 @@ impl<'d> Renderer<'d> {
                         &self.materials,
                         &self.emitters,
                         &pinhole,
-                        camera.width,
                         settings,
                         s..s + 1,
                         accumulation,

@@ -18,7 +18,8 @@ use cltrace::input::generate::Generator;
 use cltrace::intersect::{ROBUST_EXIT, Triangle};
 use cltrace::material::Material;
 use cltrace::render::integrator::{
-    Accumulation, Lighting, ROULETTE_AFTER, SHADOW_AMBIENT, SampleSettings,
+    Accumulation, Lighting, MAX_SAMPLE_RADIANCE, RADIANCE_SCALE, ROULETTE_AFTER, SHADOW_AMBIENT,
+    SampleSettings,
 };
 use cltrace::render::sampling::DIMS_PER_BOUNCE;
 use cltrace::render::{Hit, MISS, Shade};
@@ -130,6 +131,8 @@ fn device_constants_match_the_rust_constants() {
         ("DIMS_PER_BOUNCE", DIMS_PER_BOUNCE),
         ("SHADOW_AMBIENT", SHADOW_AMBIENT.to_bits()),
         ("ROULETTE_AFTER", ROULETTE_AFTER),
+        ("RADIANCE_SCALE", RADIANCE_SCALE.to_bits()),
+        ("MAX_SAMPLE_RADIANCE", MAX_SAMPLE_RADIANCE.to_bits()),
         ("ROBUST_EXIT", ROBUST_EXIT.to_bits()),
     ];
     // The probe reports every constant the host defines for the kernels, none left out.

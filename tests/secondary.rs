@@ -170,7 +170,7 @@ fn ambient_occlusion_is_zero_inside_a_closed_box() {
                 3,
             );
             assert!(
-                acc.pixels.iter().all(|p| p[3] == 2.0),
+                acc.pixels.iter().all(|p| p[3] == 2),
                 "{method:?}: every pixel has its samples"
             );
             let open = acc.radiance().iter().filter(|p| p[0] != 0.0).count();

@@ -18,6 +18,7 @@ mod loaders;
 mod module_graph;
 mod oclgrind;
 mod opencl_vs_cpu;
+mod parts;
 mod program_cache;
 mod run_report;
 mod secondary;

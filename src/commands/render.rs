@@ -13,7 +13,7 @@ use crate::geometry::Aabb;
 use crate::input::scene_file::{RenderSettings, SceneDescription};
 use crate::mesh::Mesh;
 use crate::output;
-use crate::render::integrator::{Accumulation, Light, Lighting, SampleSettings};
+use crate::render::integrator::{Accumulation, Light, Lighting, Region, SampleSettings};
 use crate::render::{Frame, Hit, Method, Shade, ShadeParams, tone_map};
 use crate::renderer::{PrepareOptions, Renderer, TraceTimes};
 use crate::report::{Timings, Verbosity, format_ms};
@@ -64,8 +64,13 @@ pub struct RenderRequest {
     pub hits: Option<PathBuf>,
     /// Where to write a JSON summary of the run, if anywhere ([`RunSummary`]).
     pub json: Option<PathBuf>,
-    /// `--device` (or `CLTRACE_DEVICE`), for OpenCL methods.
+    /// `--device` (or `CLTRACE_DEVICE`), for OpenCL methods: one selector, or a list
+    /// (`gpu,cpu`, `all`) that splits the samples of the progressive modes over the devices.
     pub device: Option<String>,
+    /// `--region`: render only these pixels, into a part ([`crate::output::part`]).
+    pub region: Option<Region>,
+    /// `--samples`: render only these sample indices, into a part.
+    pub samples: Option<std::ops::Range<u32>>,
     /// How to build the BVH, for BVH methods.
     pub build: BuildOptions,
     /// When the OpenCL device fails (none found, a failed build, out of memory, lost),
@@ -137,6 +142,21 @@ pub struct RunSummary {
     pub outputs: Vec<PathBuf>,
     /// False when the render was interrupted and the image holds fewer samples.
     pub complete: bool,
+    /// With several devices: what each did (samples taken, busy time).
+    pub devices: Vec<crate::renderer::schedule::DeviceShare>,
+    /// The part written, for `--region` or `--samples`: its region and sample range.
+    pub part: Option<PartSummary>,
+}
+
+/// The part a `--region`/`--samples` render wrote.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct PartSummary {
+    /// `x0,y0,x1,y1`.
+    pub region: String,
+    /// `FIRST..END`.
+    pub samples: String,
+    /// The fingerprint of the settings every part of the render shares.
+    pub fingerprint: String,
 }
 
 /// One stage of [`RunSummary::stages`].
@@ -327,31 +347,35 @@ fn render_with(
         }
     }
     crate::camera::check_settings(&camera_settings)?;
-    let selector = DeviceSelector::from_flag_or_env(req.device.as_deref())?;
+    let selectors = DeviceSelector::list_from_flag_or_env(req.device.as_deref())?;
+    let part = check_part(req, &camera_settings, shade)?;
 
     // Opening a GPU driver takes a few hundred milliseconds: do it while the mesh loads.
     // A device error still wins over a mesh error, as it would have come first.
     let mut timings = Timings::default();
-    let (device, mesh) = std::thread::scope(|s| {
+    let (devices, mesh) = std::thread::scope(|s| {
         let opening = method
             .uses_opencl()
-            .then(|| s.spawn(|| ClDevice::select(&selector)));
+            .then(|| s.spawn(|| ClDevice::select_each(&selectors)));
         let mesh = timings.time("load", || scene.mesh.load_with_materials());
-        // What opening the device took beyond the load is a stage of its own.
-        let device = match opening {
+        // What opening the devices took beyond the load is a stage of its own.
+        let devices = match opening {
             Some(handle) => {
-                let mut device = timings.time("open", || {
+                let mut devices = timings.time("open", || {
                     handle.join().expect("opening a device does not panic")
                 })?;
-                if let Some(folder) = &req.program_cache {
-                    device.use_program_cache(folder.clone());
+                for device in &mut devices {
+                    if let Some(folder) = &req.program_cache {
+                        device.use_program_cache(folder.clone());
+                    }
                 }
-                Some(device)
+                devices
             }
-            None => None,
+            None => Vec::new(),
         };
-        Ok::<_, crate::Error>((device, mesh?))
+        Ok::<_, crate::Error>((devices, mesh?))
     })?;
+    let device = devices.first();
     let crate::input::MeshFile {
         mesh,
         materials,
@@ -365,7 +389,7 @@ fn render_with(
         v.detail(format!("note: {note}"));
     }
     crate::interrupt::check()?;
-    if let Some(d) = &device {
+    for d in &devices {
         v.detail(format!("device: {}", d.info));
     }
     v.detail(format!(
@@ -389,36 +413,43 @@ fn render_with(
     let sampling = sample_settings(&render, shade, &bounds)?;
     let shade = ShadeParams::new(shade, &camera, &bounds);
 
-    // What `cltrace tune` found for this device: its layout unless one is asked for, and
+    // What `cltrace tune` found for each device: its layout unless one is asked for, and
     // its work-group shape.
-    let tuned = match (&device, method) {
-        (Some(d), Method::ClBvh) => req
+    let tuned_for = |d: &ClDevice| match method {
+        Method::ClBvh => req
             .tune_cache
             .as_deref()
             .and_then(|path| crate::tune::TuneCache::load(path).get(&d.info).cloned()),
         _ => None,
     };
-    let tuned_layout = tuned.as_ref().map(|t| t.layout);
-    let options = PrepareOptions {
+    let options_for = |tuned: Option<crate::tune::Tuning>| PrepareOptions {
         build: req.build,
         layout: render.layout.or(tuned.as_ref().map(|t| t.layout)),
         work_group: tuned.map(|t| t.work_group),
         sampling: sampling.is_some(),
     };
-    let mut renderer = Renderer::prepare(
-        method,
-        &mesh,
-        &materials,
-        &options,
-        device.as_ref(),
-        &mut timings,
-    )?;
+    let tuned = device.and_then(tuned_for);
+    let mut renderers = match devices.len() {
+        0 | 1 => vec![Renderer::prepare(
+            method,
+            &mesh,
+            &materials,
+            &options_for(tuned),
+            device,
+            &mut timings,
+        )?],
+        _ => {
+            let options: Vec<_> = devices.iter().map(|d| options_for(tuned_for(d))).collect();
+            let list: Vec<&ClDevice> = devices.iter().collect();
+            Renderer::prepare_each(method, &mesh, &materials, &options, &list, &mut timings)?
+        }
+    };
     crate::interrupt::check()?;
     let mut summary = RunSummary {
         version: env!("CARGO_PKG_VERSION"),
         scene: scene.mesh.name(),
         method: method.name().to_string(),
-        device: device.as_ref().map(|d| d.info.name.clone()),
+        device: device.map(|d| d.info.name.clone()),
         width: camera.width,
         height: camera.height,
         shade: shade.shade.name().to_string(),
@@ -426,34 +457,46 @@ fn render_with(
         complete: true,
         ..RunSummary::default()
     };
-    if let Some((layout, work_group)) = renderer.kernels() {
+    for (i, renderer) in renderers.iter().enumerate() {
+        let Some((layout, work_group)) = renderer.kernels() else {
+            continue;
+        };
+        let this_tuned = devices.get(i).and_then(tuned_for).map(|t| t.layout);
         let from = match layout {
             None => None,
             Some(_) if render.layout.is_some() => Some("asked for"),
-            Some(l) if tuned_layout == Some(l) => Some("tuning cache"),
+            Some(l) if this_tuned == Some(l) => Some("tuning cache"),
             Some(_) => Some("the device's default"),
         };
         let what = match (layout, from) {
             (Some(l), Some(from)) => format!("{} layout ({from})", l.name()),
             _ => "brute force".to_string(),
         };
-        let cache = match (&req.tune_cache, tuned_layout) {
+        let cache = match (&req.tune_cache, this_tuned) {
             (Some(path), Some(_)) => format!(", tuned in {}", path.display()),
             _ => String::new(),
         };
         let [across, down] = work_group;
+        let on = match devices.len() {
+            0 | 1 => String::new(),
+            _ => format!(" on {}", devices[i].info.name),
+        };
         v.detail(format!(
-            "kernels: {what}, {across}x{down} work-groups{cache}"
+            "kernels{on}: {what}, {across}x{down} work-groups{cache}"
         ));
-        summary.layout = layout.map(|l| l.name().to_string());
-        summary.work_group = Some(work_group);
-        summary.kernels_from = from.map(String::from);
+        if i == 0 {
+            summary.layout = layout.map(|l| l.name().to_string());
+            summary.work_group = Some(work_group);
+            summary.kernels_from = from.map(String::from);
+        }
+        if let Some(cache) = renderer.program_cache() {
+            v.detail(cache.describe());
+            if i == 0 {
+                summary.program_cache_hit = Some(cache.hit());
+            }
+        }
     }
-    if let Some(cache) = renderer.program_cache() {
-        v.detail(cache.describe());
-        summary.program_cache_hit = Some(cache.hit());
-    }
-    if let Some(s) = &renderer.bvh {
+    if let Some(s) = &renderers[0].bvh {
         v.detail(format!(
             "bvh: {} nodes, {} leaves, depth {}, mean leaf {:.2}, SAH cost {:.2}, {} threads",
             s.nodes,
@@ -480,25 +523,70 @@ fn render_with(
             );
         }
     };
-    let start = std::time::Instant::now();
-    let (mut frame, times) = renderer.render(&camera, &shade, v.progress())?;
-    add_times(&mut timings, traced, elapsed_ms(start), &times);
-    summary.rays = camera.width as u64 * camera.height as u64;
-    if let Some((settings, spp)) = sampling {
-        let mut accumulation = Accumulation::new(camera.width, camera.height);
+    // A part has no frame of primary rays: its image is the samples of its region.
+    let mut frame = Frame::new(camera.width, camera.height);
+    if part.is_none() {
         let start = std::time::Instant::now();
-        let times = renderer.render_samples(
-            &camera,
-            &settings,
-            0..spp,
-            &mut accumulation,
-            crate::interrupt::flag(),
-            v.progress(),
-        )?;
+        let (primary, times) = renderers[0].render(&camera, &shade, v.progress())?;
+        add_times(&mut timings, traced, elapsed_ms(start), &times);
+        frame = primary;
+        summary.rays = camera.width as u64 * camera.height as u64;
+    }
+    let mut accumulation = None;
+    if let Some((settings, spp)) = sampling {
+        let (region, samples) = match &part {
+            Some((region, samples)) => (*region, samples.clone().unwrap_or(0..spp)),
+            None => (Region::whole(camera.width, camera.height), 0..spp),
+        };
+        let mut acc = Accumulation::of_region(camera.width, camera.height, region);
+        let start = std::time::Instant::now();
+        let times = match renderers.len() {
+            1 => renderers[0].render_samples(
+                &camera,
+                &settings,
+                samples.clone(),
+                &mut acc,
+                crate::interrupt::flag(),
+                v.progress(),
+            )?,
+            _ => {
+                let names: Vec<String> = devices.iter().map(|d| d.info.name.clone()).collect();
+                let shares = crate::renderer::schedule::render_samples(
+                    &mut renderers,
+                    &names,
+                    &camera,
+                    &settings,
+                    samples.clone(),
+                    &mut acc,
+                    crate::interrupt::flag(),
+                    v.progress(),
+                )?;
+                for s in &shares {
+                    let dropped = match s.dropped_from_tail {
+                        true => ", dropped from the tail",
+                        false => "",
+                    };
+                    v.detail(format!(
+                        "{}: {:.1}% of the samples in {} units, busy {}{dropped}",
+                        s.device,
+                        100.0 * s.share,
+                        s.units,
+                        format_ms(s.busy_ms)
+                    ));
+                }
+                summary.devices = shares;
+                // The devices ran at once: the stage is the wall time they took.
+                TraceTimes {
+                    trace_ms: elapsed_ms(start),
+                    read_back_ms: 0.0,
+                }
+            }
+        };
         add_times(&mut timings, "samples", elapsed_ms(start), &times);
-        let counts = accumulation.pixels.iter().map(|p| p[3] as u64);
-        let taken = counts.clone().sum::<u64>() as f64 / accumulation.pixels.len() as f64;
-        if taken < spp as f64 {
+        let counts = acc.pixels.iter().map(|p| p[3] as u64);
+        let expected = samples.len() as f64;
+        let taken = counts.clone().sum::<u64>() as f64 / acc.pixels.len() as f64;
+        if taken < expected {
             // Interrupted. An image where some pixels have no sample would show holes as
             // black: nothing is written until every pixel has one.
             if counts.min().unwrap_or(0) == 0 {
@@ -508,15 +596,42 @@ fn render_with(
         }
         v.detail(format!(
             "samples: {taken:.1} per pixel, {:.2} million rays, {:.1} Mrays/s",
-            accumulation.rays as f64 / 1e6,
-            accumulation.rays as f64 / times.trace_ms.max(1e-9) / 1e3
+            acc.rays as f64 / 1e6,
+            acc.rays as f64 / times.trace_ms.max(1e-9) / 1e3
         ));
-        summary.spp = Some(spp);
+        summary.spp = Some(samples.len() as u32);
         summary.samples_per_pixel = Some(taken);
-        summary.rays += accumulation.rays;
-        let radiance = timings.time("tone-map", || accumulation.radiance());
-        frame.colors = tone_map(&radiance, shade.shade);
-        frame.radiance = Some(radiance);
+        summary.rays += acc.rays;
+        if part.is_none() {
+            let radiance = timings.time("tone-map", || acc.radiance());
+            frame.colors = tone_map(&radiance, shade.shade);
+            frame.radiance = Some(radiance);
+        }
+        accumulation = Some((acc, samples));
+    }
+    if let Some((acc, samples)) = accumulation.filter(|_| part.is_some()) {
+        let part = crate::output::part::Part {
+            settings: part_settings(&mesh, &materials, &camera, shade.shade, &sampling),
+            accumulation: acc,
+            samples,
+            shade: shade.shade,
+        };
+        summary.part = Some(PartSummary {
+            region: part.accumulation.region.to_string(),
+            samples: format!("{}..{}", part.samples.start, part.samples.end),
+            fingerprint: part.fingerprint(),
+        });
+        timings.time("write", || {
+            crate::output::part::write_part(&part, &req.output)
+        })?;
+        summary.outputs = vec![req.output.clone()];
+        return Ok(RenderOutcome {
+            frame,
+            method,
+            device: devices_named(&devices),
+            timings,
+            summary,
+        });
     }
     if let Some(warning) = unlit_warning(&frame, &mesh, &camera, shade.shade) {
         v.say(format!("warning: {warning}"));
@@ -536,10 +651,121 @@ fn render_with(
     Ok(RenderOutcome {
         frame,
         method,
-        device: device.map(|d| d.info.name),
+        device: devices_named(&devices),
         timings,
         summary,
     })
+}
+
+/// The part `--region`/`--samples` ask for (the region, whole when not given, and the
+/// sample range, the settings' when not given), or `None` for a whole render; refused
+/// before any work where it cannot be a part.
+fn check_part(
+    req: &RenderRequest,
+    camera: &CameraSettings,
+    shade: Shade,
+) -> Result<Option<(Region, Option<std::ops::Range<u32>>)>> {
+    if req.region.is_none() && req.samples.is_none() {
+        return Ok(None);
+    }
+    let flags = match (req.region.is_some(), req.samples.is_some()) {
+        (true, true) => "--region and --samples",
+        (true, false) => "--region",
+        _ => "--samples",
+    };
+    if !matches!(shade, Shade::Ao | Shade::Shadow | Shade::Path) {
+        return Err(Error::Invalid(format!(
+            "{flags} render part of the samples of ao, shadow or path; --shade {} renders \
+             in one pass: leave {flags} out",
+            shade.name()
+        )));
+    }
+    let exr = req
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if !exr {
+        return Err(Error::Invalid(format!(
+            "{}: a part (from {flags}) keeps its sums and sample counts in OpenEXR: name the \
+             output *.exr, then `cltrace merge` the parts into any format",
+            req.output.display()
+        )));
+    }
+    if req.hits.is_some() {
+        return Err(Error::Invalid(format!(
+            "--hits records a whole frame's hits: leave it out with {flags}"
+        )));
+    }
+    if let Some(samples) = &req.samples
+        && samples.end > MAX_SPP
+    {
+        return Err(Error::Invalid(format!(
+            "--samples {}..{}: sample indices go up to {MAX_SPP}",
+            samples.start, samples.end
+        )));
+    }
+    let width = camera.width.unwrap_or(crate::camera::DEFAULT_WIDTH);
+    let height = camera.height.unwrap_or(crate::camera::DEFAULT_HEIGHT);
+    let region = req.region.unwrap_or(Region::whole(width, height));
+    if region.x1 > width || region.y1 > height {
+        return Err(Error::Invalid(format!(
+            "--region {region} is outside the {width}x{height} image"
+        )));
+    }
+    Ok(Some((region, req.samples.clone())))
+}
+
+/// What every part of one render shares, one `key=value` a line: the scene's content (a
+/// hash of the triangles and materials, so a renamed file still fits), the camera and
+/// image size, and the shading. Device, method and layout are not in it: parts rendered
+/// by different devices merge.
+fn part_settings(
+    mesh: &Mesh,
+    materials: &crate::material::Materials,
+    camera: &Camera,
+    shade: Shade,
+    sampling: &Option<(SampleSettings, u32)>,
+) -> String {
+    let mut bytes: Vec<u8> = Vec::new();
+    for p in &mesh.positions {
+        for c in p.to_array() {
+            bytes.extend(c.to_le_bytes());
+        }
+    }
+    for t in &mesh.triangles {
+        for i in t {
+            bytes.extend(i.to_le_bytes());
+        }
+    }
+    for m in &materials.per_triangle {
+        bytes.extend(m.to_le_bytes());
+    }
+    bytes.extend(format!("{:?}", materials.list).as_bytes());
+    let scene = crate::hash::fnv1a(&bytes);
+    let mut lines = vec![
+        format!("scene={scene:016x}"),
+        format!("image={}x{}", camera.width, camera.height),
+        format!(
+            "camera=eye {:?} look_at {:?} up {:?} fov {:?}",
+            camera.eye.to_array(),
+            camera.look_at.to_array(),
+            camera.up.to_array(),
+            camera.fov
+        ),
+        format!("shade={}", shade.name()),
+    ];
+    if let Some((s, _)) = sampling {
+        lines.push(format!("lighting={:?}", s.lighting));
+        lines.push(format!("offset={:?}", s.offset));
+        lines.push(format!("seed={}", s.seed));
+    }
+    lines.join("\n")
+}
+
+/// The devices' names for the report: `a`, or `a + b` for several.
+fn devices_named(devices: &[ClDevice]) -> Option<String> {
+    let names: Vec<&str> = devices.iter().map(|d| d.info.name.as_str()).collect();
+    (!names.is_empty()).then(|| names.join(" + "))
 }
 
 fn elapsed_ms(start: std::time::Instant) -> f64 {

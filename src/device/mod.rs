@@ -257,6 +257,8 @@ pub enum DeviceSelector {
     Kind(DeviceKind),
     /// Any other text: the first device whose name or platform name contains it, ignoring case.
     Name(String),
+    /// `all`: every device (in a list for `render --device`; alone, the default device).
+    All,
 }
 
 impl FromStr for DeviceSelector {
@@ -277,6 +279,7 @@ impl FromStr for DeviceSelector {
             "gpu" => DeviceSelector::Kind(DeviceKind::Gpu),
             "cpu" => DeviceSelector::Kind(DeviceKind::Cpu),
             "accelerator" => DeviceSelector::Kind(DeviceKind::Accelerator),
+            "all" => DeviceSelector::All,
             _ => DeviceSelector::Name(s.to_string()),
         })
     }
@@ -302,7 +305,7 @@ impl DeviceSelector {
             )));
         }
         let found = match self {
-            DeviceSelector::Default => devices
+            DeviceSelector::Default | DeviceSelector::All => devices
                 .iter()
                 .find(|d| d.kind == DeviceKind::Gpu)
                 .or(devices.first()),
@@ -334,7 +337,39 @@ impl DeviceSelector {
             DeviceSelector::Index(p, d) => format!("{p}:{d}"),
             DeviceSelector::Kind(k) => k.to_string(),
             DeviceSelector::Name(n) => n.clone(),
+            DeviceSelector::All => "all".into(),
         }
+    }
+
+    /// A comma-separated list of selectors (`gpu,cpu`, `0:0,1:0`, `all`), from `--device`
+    /// if given, else from `CLTRACE_DEVICE`, else the default device alone.
+    pub fn list_from_flag_or_env(flag: Option<&str>) -> Result<Vec<Self>> {
+        let text = match flag {
+            Some(s) => s.to_string(),
+            None => match std::env::var("CLTRACE_DEVICE") {
+                Ok(s) if !s.trim().is_empty() => s,
+                _ => return Ok(vec![DeviceSelector::Default]),
+            },
+        };
+        text.split(',').map(str::parse).collect()
+    }
+
+    /// The devices a list of selectors names among `devices`, in order, each once: `all`
+    /// is every device.
+    pub fn pick_each<'a>(list: &[Self], devices: &'a [DeviceInfo]) -> Result<Vec<&'a DeviceInfo>> {
+        let mut picked: Vec<&DeviceInfo> = Vec::new();
+        for selector in list {
+            let found = match selector {
+                DeviceSelector::All if !devices.is_empty() => devices.iter().collect(),
+                s => vec![s.pick(devices)?],
+            };
+            for d in found {
+                if !picked.iter().any(|p| p.index() == d.index()) {
+                    picked.push(d);
+                }
+            }
+        }
+        Ok(picked)
     }
 }
 
@@ -358,6 +393,23 @@ impl ClDevice {
     pub fn select(selector: &DeviceSelector) -> Result<Self> {
         let devices = list_devices()?;
         Self::open(selector.pick(&devices)?.clone())
+    }
+
+    /// Lists the devices and opens each one `list` names, at once (a GPU driver takes a
+    /// few hundred milliseconds to open).
+    pub fn select_each(list: &[DeviceSelector]) -> Result<Vec<Self>> {
+        let devices = list_devices()?;
+        let picked = DeviceSelector::pick_each(list, &devices)?;
+        std::thread::scope(|s| {
+            let opening: Vec<_> = picked
+                .iter()
+                .map(|&info| s.spawn(move || Self::open(info.clone())))
+                .collect();
+            opening
+                .into_iter()
+                .map(|h| h.join().expect("opening a device does not panic"))
+                .collect()
+        })
     }
 
     pub(crate) fn open(info: DeviceInfo) -> Result<Self> {

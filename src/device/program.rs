@@ -105,6 +105,8 @@ pub fn shared_constants() -> Vec<(&'static str, Constant)> {
         ("DIMS_PER_BOUNCE", U32(sampling::DIMS_PER_BOUNCE)),
         ("SHADOW_AMBIENT", F32(integrator::SHADOW_AMBIENT)),
         ("ROULETTE_AFTER", U32(integrator::ROULETTE_AFTER)),
+        ("RADIANCE_SCALE", F32(integrator::RADIANCE_SCALE)),
+        ("MAX_SAMPLE_RADIANCE", F32(integrator::MAX_SAMPLE_RADIANCE)),
         ("ROBUST_EXIT", F32(crate::intersect::ROBUST_EXIT)),
     ]
 }

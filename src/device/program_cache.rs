@@ -5,6 +5,7 @@
 //! hash collision, a truncated or a corrupt file reads as a miss and is rebuilt; entries
 //! are written atomically. The cache is an optimisation: no failure of it fails a render.
 
+use crate::hash::fnv1a;
 use std::path::PathBuf;
 
 use super::DeviceInfo;
@@ -159,14 +160,6 @@ fn parse(bytes: &[u8], key: &[u8]) -> Result<Vec<u8>, String> {
         return Err(corrupt());
     }
     Ok(binary)
-}
-
-/// 64-bit FNV-1a: a hash that stays the same across Rust releases, for file names and
-/// checksums (not for security: the key inside each entry is compared in full).
-fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
-        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
-    })
 }
 
 #[cfg(test)]

@@ -5,7 +5,7 @@
 use std::time::Instant;
 
 use ocl::enums::ProfilingInfo;
-use ocl::prm::Float4;
+use ocl::prm::{Float4, Long4};
 
 use super::{ClDevice, PitchedBuffer, Program};
 use crate::bvh::{Bin32Bvh, DeviceLayout, Layout};
@@ -224,9 +224,11 @@ kernel_params! {
         ao_distance: f32,
         light: Float4,
         max_bounces: u32,
-        accum: &'a ocl::Buffer<Float4>,
+        accum: &'a ocl::Buffer<Long4>,
         rays: &'a ocl::Buffer<u32>,
         accum_pitch: u32,
+        col0: u32,
+        col_end: u32,
     }
 }
 
@@ -493,7 +495,7 @@ impl<'d> ClTracer<'d> {
         Ok(())
     }
 
-    /// Adds the samples `samples` of every pixel to `accumulation`, with the kernels of
+    /// Adds the samples `samples` of every pixel of `accumulation`'s region to it, with the kernels of
     /// cl/integrator.cl (the program must have been compiled with sampling). Launches cover bands
     /// of rows, each about `LAUNCH_TARGET_MS` (100 ms); a whole sample of the image is taken before
     /// the next one where the accumulation image fits on the device, so that stopping early
@@ -512,8 +514,9 @@ impl<'d> ClTracer<'d> {
     ) -> Result<DeviceTimes> {
         use std::sync::atomic::Ordering;
         let device = self.device;
-        let (width, height) = (accumulation.width, accumulation.height);
-        let (w, h) = (width as usize, height as usize);
+        let (width, region) = (accumulation.width, accumulation.region);
+        let (w, h) = (region.width() as usize, region.height() as usize);
+        let (x0, y0) = (region.x0 as usize, region.y0 as usize);
         let kernel = match settings.lighting {
             Lighting::Ao { .. } => Kernel::SampleAo,
             Lighting::Shadow { .. } => Kernel::SampleShadow,
@@ -525,9 +528,9 @@ impl<'d> ClTracer<'d> {
             self.set_lights(&[Material::default()], &Emitters::default())?;
         }
         let lights = self.lights.as_ref().expect("set above");
-        // 16 bytes of radiance and 4 of ray count a pixel.
-        let capacity = capacity::<Float4>(device, self.image_budget, w, h);
-        let accum = PitchedBuffer::<Float4>::read_write(device, w, capacity)?;
+        // 32 bytes of radiance sums and 4 of ray count a pixel.
+        let capacity = capacity::<Long4>(device, self.image_budget, w, h);
+        let accum = PitchedBuffer::<Long4>::read_write(device, w, capacity)?;
         let pitch = accum.pitch;
         let rays = ocl::Buffer::<u32>::builder()
             .queue(device.queue.clone())
@@ -567,6 +570,8 @@ impl<'d> ClTracer<'d> {
             accum: &accum.buffer,
             rays: &rays,
             accum_pitch: pitch as u32,
+            col0: region.x0,
+            col_end: region.x1,
         };
         let mut builder = kernel_builder(device, &self.program, kernel, &self.scene)?;
         light_params.bind(&mut builder);
@@ -584,7 +589,7 @@ impl<'d> ClTracer<'d> {
         self.scene.clear_status(device)?;
         let local = self.local;
         let mut times = DeviceTimes::default();
-        let mut host = vec![Float4::zero(); w * capacity];
+        let mut host = vec![Long4::zero(); w * capacity];
         let mut counts = vec![0u32; pitch * capacity];
         let mut group0 = 0usize;
         'groups: while group0 < h {
@@ -592,7 +597,7 @@ impl<'d> ClTracer<'d> {
             accum
                 .buffer
                 .cmd()
-                .fill(Float4::zero(), None)
+                .fill(Long4::zero(), None)
                 .enq()
                 .map_err(|e| device.error("clearing the accumulation image", e))?;
             rays.cmd()
@@ -600,21 +605,21 @@ impl<'d> ClTracer<'d> {
                 .enq()
                 .map_err(|e| device.error("clearing the ray counts", e))?;
             // The accumulation image's row 0 is the group's first row; bands run inside it.
-            band.row0 = group0 as u32;
+            band.row0 = (y0 + group0) as u32;
             let mut stopped = false;
             let mut rays_per_sample = None;
             'samples: for (done, sample) in samples.clone().enumerate() {
                 params.sample = sample;
-                let mut y0 = group0;
-                while y0 < group0 + group_rows {
-                    let rows = self.sample_bands.next_rows(w, group0 + group_rows - y0);
-                    band.row_end = (y0 + rows) as u32;
+                let mut row = group0;
+                while row < group0 + group_rows {
+                    let rows = self.sample_bands.next_rows(w, group0 + group_rows - row);
+                    band.row_end = (y0 + row + rows) as u32;
                     set(&band, &params)?;
-                    let ms = launch_rows(device, &kernel, local, w, y0, rows)?;
+                    let ms = launch_rect(device, &kernel, local, [x0, y0 + row], [w, rows])?;
                     times.kernel_ms += ms;
                     times.launches += 1;
                     self.sample_bands.learn(rows * w, ms);
-                    y0 += rows;
+                    row += rows;
                     if stop.load(Ordering::Relaxed) {
                         stopped = true;
                         break 'samples;
@@ -643,10 +648,9 @@ impl<'d> ClTracer<'d> {
             for (row, chunk) in host[..w * group_rows].chunks(w).enumerate() {
                 let out = &mut accumulation.pixels[(group0 + row) * w..(group0 + row + 1) * w];
                 for (o, v) in out.iter_mut().zip(chunk) {
-                    o[0] += v[0];
-                    o[1] += v[1];
-                    o[2] += v[2];
-                    o[3] += v[3];
+                    for c in 0..4 {
+                        o[c] += v[c];
+                    }
                 }
                 accumulation.rays += counts[row * pitch..row * pitch + w]
                     .iter()
@@ -906,15 +910,27 @@ fn launch_rows(
     y0: usize,
     rows: usize,
 ) -> Result<f64> {
+    launch_rect(device, kernel, local, [0, y0], [width, rows])
+}
+
+/// Launches `kernel` over the `size` pixels from `origin` (the global offset), the global
+/// size rounded up to whole work-groups: the kernels return at once past the rectangle.
+fn launch_rect(
+    device: &ClDevice,
+    kernel: &ocl::Kernel,
+    local: [usize; 2],
+    origin: [usize; 2],
+    size: [usize; 2],
+) -> Result<f64> {
     let global = [
-        width.div_ceil(local[0]) * local[0],
-        rows.div_ceil(local[1]) * local[1],
+        size[0].div_ceil(local[0]) * local[0],
+        size[1].div_ceil(local[1]) * local[1],
     ];
     launch(
         device,
         kernel
             .cmd()
-            .global_work_offset([0, y0])
+            .global_work_offset(origin)
             .global_work_size(global)
             .local_work_size(local),
     )

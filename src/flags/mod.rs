@@ -5,6 +5,7 @@
 mod bench;
 mod build;
 mod bvh;
+mod merge;
 mod render;
 mod tune;
 mod values;
@@ -15,6 +16,7 @@ use clap::{Parser, Subcommand};
 
 pub use bench::BenchArgs;
 pub use bvh::BvhArgs;
+pub use merge::MergeArgs;
 pub use render::RenderArgs;
 pub use tune::TuneArgs;
 
@@ -48,6 +50,10 @@ pub enum Command {
     /// Render a scene file or a mesh to an image
     #[command(after_help = EXAMPLES, allow_negative_numbers = true)]
     Render(RenderArgs),
+    /// Add the parts of a render (`render --region` or `--samples`) into one image, exactly:
+    /// the same image as rendering it at once
+    #[command(after_help = merge::EXAMPLES)]
+    Merge(MergeArgs),
     /// List every OpenCL platform and device, with the index `--device` accepts
     Devices,
     /// Measure every method on every OpenCL device for each scene and resolution (auto

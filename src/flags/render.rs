@@ -11,6 +11,7 @@ use cltrace::bvh::Layout;
 use cltrace::camera::CameraSettings;
 use cltrace::commands::render::RenderRequest;
 use cltrace::input::scene_file::RenderSettings;
+use cltrace::render::integrator::{Region, parse_sample_range};
 use cltrace::render::{Method, Shade};
 use cltrace::report::Verbosity;
 
@@ -32,9 +33,21 @@ pub struct RenderArgs {
     camera: CameraArgs,
 
     /// OpenCL device: `P:D` index (see `cltrace devices`), `gpu`, `cpu`, or part of its
-    /// name [default: the first GPU, else the first device]
+    /// name; or several, comma-separated (`gpu,cpu`, `0:0,1:0`) or `all`, to split the
+    /// samples of ao, shadow and path over them (faster devices take more; the image is the
+    /// same) [default: the first GPU, else the first device]
     #[arg(long, env = "CLTRACE_DEVICE")]
     device: Option<String>,
+
+    /// Render only the pixels x0..x1, y0..y1 (ends exclusive) into a part: an OpenEXR file
+    /// of per-pixel sums and sample counts for `cltrace merge` (ao, shadow, path)
+    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = parse_region)]
+    region: Option<Region>,
+
+    /// Render only the sample indices FIRST..END (END exclusive) into a part, as --region
+    /// does; parts of different sample ranges add up exactly in `cltrace merge`
+    #[arg(long, value_name = "FIRST..END", value_parser = parse_samples, conflicts_with = "spp")]
+    samples: Option<std::ops::Range<u32>>,
 
     #[command(flatten)]
     settings: SettingsArgs,
@@ -63,6 +76,14 @@ pub struct RenderArgs {
     /// Also print mesh, camera, device and BVH details
     #[arg(short, long)]
     verbose: bool,
+}
+
+fn parse_region(s: &str) -> Result<Region, String> {
+    s.parse()
+}
+
+fn parse_samples(s: &str) -> Result<std::ops::Range<u32>, String> {
+    parse_sample_range(s)
 }
 
 /// Where `--fallback` sends a render whose OpenCL device fails: one place for now, named so
@@ -168,6 +189,8 @@ impl RenderArgs {
             hits: self.hits,
             json: self.json,
             device: self.device,
+            region: self.region,
+            samples: self.samples,
             build: self.build.options(),
             fallback_to_cpu: self.fallback == Some(Fallback::Cpu),
             tune_cache: cltrace::tune::cache_path(),

@@ -20,6 +20,26 @@ use crate::material::Material;
 pub const SHADOW_AMBIENT: f32 = 0.1;
 /// Bounces after which Russian roulette may end a path.
 pub const ROULETTE_AFTER: u32 = 3;
+/// Each sample's radiance is added as a fixed-point number with this many units per 1
+/// (2^20): integer sums are exact and do not depend on the order they are added in, so a
+/// render split into tiles, sample ranges or devices and merged equals the one-shot render
+/// bit for bit. The step, about 1e-6, is below what an 8-bit or half-float image resolves.
+pub const RADIANCE_SCALE: f32 = 1_048_576.0;
+/// A sample's radiance is clamped to this (2^22) before it is added, so that 65,536
+/// samples of it (the most a pixel takes) still fit the 64-bit sums; NaN adds 0.
+pub const MAX_SAMPLE_RADIANCE: f32 = 4_194_304.0;
+
+/// One component of a sample's radiance as it is added to the sums (the kernels'
+/// `to_fixed`): clamped to [0, [`MAX_SAMPLE_RADIANCE`]] (NaN to 0), scaled by
+/// [`RADIANCE_SCALE`] (exact: a power of two) and rounded to the nearest, ties to even.
+pub fn to_fixed(v: f32) -> i64 {
+    let v = if v >= 0.0 {
+        v.min(MAX_SAMPLE_RADIANCE)
+    } else {
+        0.0
+    };
+    (v * RADIANCE_SCALE).round_ties_even() as i64
+}
 
 /// The light of `--shade shadow`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -315,13 +335,110 @@ pub(crate) fn sample_pixel(
     }
 }
 
-/// Per-pixel sums of radiance with their sample counts, and the rays traced for them.
+/// A rectangle of an image's pixels: columns `x0..x1`, rows `y0..y1`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Region {
+    /// The first column.
+    pub x0: u32,
+    /// The first row.
+    pub y0: u32,
+    /// One past the last column.
+    pub x1: u32,
+    /// One past the last row.
+    pub y1: u32,
+}
+
+impl Region {
+    /// The whole of a `width` x `height` image.
+    pub fn whole(width: u32, height: u32) -> Self {
+        Region {
+            x0: 0,
+            y0: 0,
+            x1: width,
+            y1: height,
+        }
+    }
+
+    /// Columns.
+    pub fn width(&self) -> u32 {
+        self.x1 - self.x0
+    }
+
+    /// Rows.
+    pub fn height(&self) -> u32 {
+        self.y1 - self.y0
+    }
+
+    /// Pixels.
+    pub fn pixels(&self) -> usize {
+        self.width() as usize * self.height() as usize
+    }
+
+    /// Whether the two share a pixel.
+    pub fn overlaps(&self, other: &Region) -> bool {
+        self.x0 < other.x1 && other.x0 < self.x1 && self.y0 < other.y1 && other.y0 < self.y1
+    }
+}
+
+impl std::str::FromStr for Region {
+    type Err = String;
+
+    /// `x0,y0,x1,y1`: columns x0..x1 and rows y0..y1, in pixels, the ends exclusive.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = || format!("`{s}` is not a region: use x0,y0,x1,y1 (pixels, ends exclusive)");
+        let v: Vec<u32> = s
+            .split(',')
+            .map(|c| c.trim().parse::<u32>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| bad())?;
+        let [x0, y0, x1, y1] = v[..] else {
+            return Err(bad());
+        };
+        if x0 >= x1 || y0 >= y1 {
+            return Err(format!(
+                "region `{s}` is empty: x0 < x1 and y0 < y1 are needed (the ends are exclusive)"
+            ));
+        }
+        Ok(Region { x0, y0, x1, y1 })
+    }
+}
+
+/// Parses `FIRST..END`, a range of sample indices, END exclusive and above FIRST.
+pub fn parse_sample_range(s: &str) -> Result<std::ops::Range<u32>, String> {
+    let bad = || format!("`{s}` is not a sample range: use FIRST..END (END exclusive), e.g. 0..64");
+    let (a, b) = s.split_once("..").ok_or_else(bad)?;
+    let (a, b) = (
+        a.trim().parse::<u32>().map_err(|_| bad())?,
+        b.trim().parse::<u32>().map_err(|_| bad())?,
+    );
+    if a >= b {
+        return Err(format!(
+            "sample range `{s}` is empty: END must be above FIRST"
+        ));
+    }
+    Ok(a..b)
+}
+
+impl std::fmt::Display for Region {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{},{},{},{}", self.x0, self.y0, self.x1, self.y1)
+    }
+}
+
+/// Per-pixel sums of radiance with their sample counts over a region of an image, and the
+/// rays traced for them. The sums are fixed-point ([`to_fixed`]), so adding two
+/// accumulations is exact.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Accumulation {
+    /// The image the region is part of (the camera's size): its width fixes each pixel's
+    /// random numbers.
     pub(crate) width: u32,
     pub(crate) height: u32,
-    /// Red, green, blue sums and the number of samples, per pixel, row-major.
-    pub pixels: Vec<[f32; 4]>,
+    /// The pixels these sums are of.
+    pub region: Region,
+    /// Red, green, blue sums (fixed-point) and the number of samples, per pixel of the
+    /// region, row-major.
+    pub pixels: Vec<[i64; 4]>,
     /// Rays traced for these sums (camera, occlusion and bounce rays).
     pub rays: u64,
 }
@@ -329,54 +446,85 @@ pub struct Accumulation {
 impl Accumulation {
     /// A `width` x `height` accumulation with no samples.
     pub fn new(width: u32, height: u32) -> Self {
+        Self::of_region(width, height, Region::whole(width, height))
+    }
+
+    /// An accumulation of `region` of a `width` x `height` image, with no samples.
+    pub fn of_region(width: u32, height: u32, region: Region) -> Self {
+        assert!(
+            region.x0 <= region.x1 && region.x1 <= width && region.y0 <= region.y1,
+            "region {region} outside a {width}x{height} image"
+        );
+        assert!(
+            region.y1 <= height,
+            "region {region} outside {width}x{height}"
+        );
         Accumulation {
             width,
             height,
-            pixels: vec![[0.0; 4]; width as usize * height as usize],
+            region,
+            pixels: vec![[0; 4]; region.pixels()],
             rays: 0,
         }
     }
 
-    /// Mean radiance per pixel (black where no sample was taken).
+    /// The image's size, (width, height).
+    pub fn image_size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Mean radiance per pixel of the region (black where no sample was taken).
     pub fn radiance(&self) -> Vec<[f32; 3]> {
-        self.pixels
-            .iter()
-            .map(|p| {
-                if p[3] > 0.0 {
-                    [p[0] / p[3], p[1] / p[3], p[2] / p[3]]
-                } else {
-                    [0.0; 3]
-                }
-            })
-            .collect()
+        self.pixels.iter().map(mean_radiance).collect()
     }
 }
 
-/// Samples `spp` of every pixel on the host (rayon over rows). `stop`, once set, ends the
-/// work after the rows under way; each pixel keeps the samples it got.
+/// Adds a sample to a pixel's sums, as the kernels' `add_sample` does.
+fn add_sample(px: &mut [i64; 4], l: Vec3) {
+    px[0] += to_fixed(l.x);
+    px[1] += to_fixed(l.y);
+    px[2] += to_fixed(l.z);
+    px[3] += 1;
+}
+
+/// The mean radiance of a pixel's sums (black without samples).
+pub fn mean_radiance(p: &[i64; 4]) -> [f32; 3] {
+    if p[3] > 0 {
+        let n = p[3] as f64 * RADIANCE_SCALE as f64;
+        [0, 1, 2].map(|c| (p[c] as f64 / n) as f32)
+    } else {
+        [0.0; 3]
+    }
+}
+
+/// Samples `samples` of every pixel of the accumulation's region on the host (rayon over
+/// rows). `stop`, once set, ends the work after the rows under way; each pixel keeps the
+/// samples it got.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn render_samples(
     tracer: &(impl ClosestHit + ?Sized),
     materials: &[Material],
     emitters: &Emitters,
     camera: &Pinhole,
-    width: u32,
     settings: &SampleSettings,
     samples: std::ops::Range<u32>,
     accumulation: &mut Accumulation,
     stop: &AtomicBool,
 ) {
-    let w = width as usize;
+    let region = accumulation.region;
+    let width = accumulation.width;
     let rays: u64 = accumulation
         .pixels
-        .par_chunks_mut(w)
+        .par_chunks_mut(region.width().max(1) as usize)
         .enumerate()
-        .map(|(y, row)| {
+        .map(|(row, pixels)| {
             if stop.load(Ordering::Relaxed) {
                 return 0;
             }
+            let y = region.y0 + row as u32;
             let mut rays = 0u64;
-            for (x, px) in row.iter_mut().enumerate() {
+            for (col, px) in pixels.iter_mut().enumerate() {
+                let x = region.x0 + col as u32;
                 for s in samples.clone() {
                     let (l, r) = sample_pixel(
                         tracer,
@@ -384,13 +532,10 @@ pub(crate) fn render_samples(
                         emitters,
                         camera,
                         settings,
-                        (x as u32, y as u32, width),
+                        (x, y, width),
                         s,
                     );
-                    px[0] += l.x;
-                    px[1] += l.y;
-                    px[2] += l.z;
-                    px[3] += 1.0;
+                    add_sample(px, l);
                     rays += r as u64;
                 }
             }
@@ -398,4 +543,64 @@ pub(crate) fn render_samples(
         })
         .sum();
     accumulation.rays += rays;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn to_fixed_clamps_rounds_to_even_and_takes_nan_as_zero() {
+        assert_eq!(to_fixed(1.0), 1 << 20);
+        assert_eq!(to_fixed(0.5 / RADIANCE_SCALE), 0, "a tie rounds to even: 0");
+        assert_eq!(to_fixed(1.5 / RADIANCE_SCALE), 2, "a tie rounds to even: 2");
+        assert_eq!(to_fixed(-3.0), 0);
+        assert_eq!(to_fixed(f32::NAN), 0);
+        assert_eq!(to_fixed(f32::INFINITY), 1 << 42);
+        assert_eq!(to_fixed(1e30), 1 << 42);
+        // The largest sum a pixel can reach still fits.
+        assert!((1i64 << 42).checked_mul(65536).is_some());
+    }
+
+    #[test]
+    fn sums_do_not_depend_on_the_order_they_are_added_in() {
+        let values: Vec<Vec3> = (0..1000)
+            .map(|i| Vec3::splat(((i * 7919) % 1000) as f32 * 1.37e-3 + 1e-7))
+            .collect();
+        let mut forward = [0i64; 4];
+        let mut backward = [0i64; 4];
+        let (mut halves_a, mut halves_b) = ([0i64; 4], [0i64; 4]);
+        for v in &values {
+            add_sample(&mut forward, *v);
+        }
+        for v in values.iter().rev() {
+            add_sample(&mut backward, *v);
+        }
+        for v in &values[..313] {
+            add_sample(&mut halves_a, *v);
+        }
+        for v in &values[313..] {
+            add_sample(&mut halves_b, *v);
+        }
+        let merged: Vec<i64> = (0..4).map(|c| halves_a[c] + halves_b[c]).collect();
+        assert_eq!(forward, backward);
+        assert_eq!(forward.to_vec(), merged);
+        let mean = mean_radiance(&forward)[0] as f64;
+        let exact = values.iter().map(|v| v.x as f64).sum::<f64>() / 1000.0;
+        assert!((mean - exact).abs() < 1e-6, "{mean} vs {exact}");
+    }
+
+    #[test]
+    fn regions_and_sample_ranges_parse_or_say_why_not() {
+        let r: Region = "1,2,30,40".parse().unwrap();
+        assert_eq!((r.x0, r.y0, r.x1, r.y1), (1, 2, 30, 40));
+        assert_eq!(r.to_string(), "1,2,30,40");
+        for bad in ["1,2,3", "a,b,c,d", "5,0,5,9", "0,-1,4,4", ""] {
+            assert!(bad.parse::<Region>().is_err(), "{bad}");
+        }
+        assert_eq!(parse_sample_range("0..64").unwrap(), 0..64);
+        for bad in ["64..0", "3..3", "0-64", "..4", "a..b"] {
+            assert!(parse_sample_range(bad).is_err(), "{bad}");
+        }
+    }
 }
