@@ -341,6 +341,45 @@ impl<'d> Renderer<'d> {
         Ok(times)
     }
 
+    /// Sums of `region` kept on the device between units of a frame split over devices
+    /// ([`schedule`]); `None` for the host methods, or where they do not fit on the device.
+    pub(crate) fn begin_samples(
+        &mut self,
+        camera: &Camera,
+        settings: &SampleSettings,
+        region: crate::render::integrator::Region,
+    ) -> Result<Option<crate::device::tracer::SampleSession>> {
+        match &mut self.tracer {
+            Tracer::Cl(t) => t.begin_samples(&camera.pinhole(), settings, camera.width, region),
+            _ => Ok(None),
+        }
+    }
+
+    /// Adds samples of some rows to a session's sums; the kernels' time, ms.
+    pub(crate) fn add_samples(
+        &mut self,
+        session: &mut crate::device::tracer::SampleSession,
+        rows: std::ops::Range<u32>,
+        samples: std::ops::Range<u32>,
+        stop: &AtomicBool,
+    ) -> Result<f64> {
+        match &mut self.tracer {
+            Tracer::Cl(t) => t.add_samples(session, rows, samples, stop),
+            _ => unreachable!("only the OpenCL tracer starts sessions"),
+        }
+    }
+
+    /// A session's sums, read back.
+    pub(crate) fn finish_samples(
+        &mut self,
+        session: crate::device::tracer::SampleSession,
+    ) -> Result<Accumulation> {
+        match &mut self.tracer {
+            Tracer::Cl(t) => t.finish_samples(session),
+            _ => unreachable!("only the OpenCL tracer starts sessions"),
+        }
+    }
+
     /// What the OpenCL kernels run with: the BVH layout (`None` for brute force) and the
     /// work-group shape; `None` for the host methods.
     pub(crate) fn kernels(&self) -> Option<(Option<Layout>, [usize; 2])> {

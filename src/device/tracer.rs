@@ -14,7 +14,7 @@ use crate::error::{Error, Result};
 use crate::geometry::Ray;
 use crate::intersect::Triangle;
 use crate::material::Material;
-use crate::render::integrator::{Accumulation, Emitters, Light, Lighting, SampleSettings};
+use crate::render::integrator::{Accumulation, Emitters, Light, Lighting, Region, SampleSettings};
 use crate::render::{Frame, Hit, ShadeParams};
 use crate::report::Progress;
 
@@ -173,6 +173,60 @@ impl BandParams {
             width,
             row0: 0,
             row_end: 0,
+        }
+    }
+}
+
+/// A sample kernel ready to launch, with its accumulation images.
+struct SampleSetup {
+    kernel: ocl::Kernel,
+    accum: PitchedBuffer<Long4>,
+    rays: ocl::Buffer<u32>,
+    band: BandParams,
+    values: SampleValues,
+    name: &'static str,
+}
+
+/// Sums of a region kept on the device between units ([`ClTracer::begin_samples`]).
+pub(crate) struct SampleSession {
+    setup: SampleSetup,
+    width: u32,
+    region: Region,
+}
+
+/// The values of `SampleParams` that stay the same from launch to launch.
+#[derive(Clone, Copy)]
+struct SampleValues {
+    offset: f32,
+    seed: u32,
+    ao_samples: u32,
+    ao_distance: f32,
+    light: Float4,
+    max_bounces: u32,
+    col0: u32,
+    col_end: u32,
+}
+
+impl SampleValues {
+    fn params<'a>(
+        &self,
+        sample: u32,
+        accum: &'a PitchedBuffer<Long4>,
+        rays: &'a ocl::Buffer<u32>,
+    ) -> SampleParams<'a> {
+        SampleParams {
+            offset: self.offset,
+            seed: self.seed,
+            sample,
+            ao_samples: self.ao_samples,
+            ao_distance: self.ao_distance,
+            light: self.light,
+            max_bounces: self.max_bounces,
+            accum: &accum.buffer,
+            rays,
+            accum_pitch: accum.pitch as u32,
+            col0: self.col0,
+            col_end: self.col_end,
         }
     }
 }
@@ -517,69 +571,18 @@ impl<'d> ClTracer<'d> {
         let (width, region) = (accumulation.width, accumulation.region);
         let (w, h) = (region.width() as usize, region.height() as usize);
         let (x0, y0) = (region.x0 as usize, region.y0 as usize);
-        let kernel = match settings.lighting {
-            Lighting::Ao { .. } => Kernel::SampleAo,
-            Lighting::Shadow { .. } => Kernel::SampleShadow,
-            Lighting::Path { .. } => Kernel::SamplePath,
-        };
-        require_kernel(&self.program, kernel)?;
-        let name = kernel.name();
-        if self.lights.is_none() {
-            self.set_lights(&[Material::default()], &Emitters::default())?;
-        }
-        let lights = self.lights.as_ref().expect("set above");
         // 32 bytes of radiance sums and 4 of ray count a pixel.
         let capacity = capacity::<Long4>(device, self.image_budget, w, h);
-        let accum = PitchedBuffer::<Long4>::read_write(device, w, capacity)?;
+        let SampleSetup {
+            kernel,
+            accum,
+            rays,
+            mut band,
+            values,
+            name,
+        } = self.sample_setup(camera, settings, width, region, capacity)?;
         let pitch = accum.pitch;
-        let rays = ocl::Buffer::<u32>::builder()
-            .queue(device.queue.clone())
-            .flags(ocl::flags::MEM_READ_WRITE)
-            .len(pitch * capacity)
-            .build()
-            .map_err(|e| device.error("allocating the ray counts", e))?;
-
-        let (ao_samples, ao_distance, light, max_bounces) = match settings.lighting {
-            Lighting::Ao { samples, distance } => (samples, distance, Float4::zero(), 0),
-            Lighting::Shadow { light } => {
-                let l = match light {
-                    Light::Directional(d) => Float4::new(d.x, d.y, d.z, 0.0),
-                    Light::Point(p) => Float4::new(p.x, p.y, p.z, 1.0),
-                };
-                (0, 0.0, l, 0)
-            }
-            Lighting::Path { max_bounces } => (0, 0.0, Float4::zero(), max_bounces),
-        };
-        let light_params = LightParams {
-            materials: &lights.materials,
-            emitters: &lights.emitters,
-            emitter_cdf: &lights.cdf,
-            emitter_count: lights.count,
-            emitter_area: lights.area,
-        };
-        // The band (row0, row_end) and the sample change from launch to launch.
-        let mut band = BandParams::new(camera, width);
-        let mut params = SampleParams {
-            offset: settings.offset,
-            seed: settings.seed,
-            sample: 0,
-            ao_samples,
-            ao_distance,
-            light,
-            max_bounces,
-            accum: &accum.buffer,
-            rays: &rays,
-            accum_pitch: pitch as u32,
-            col0: region.x0,
-            col_end: region.x1,
-        };
-        let mut builder = kernel_builder(device, &self.program, kernel, &self.scene)?;
-        light_params.bind(&mut builder);
-        band.bind(&mut builder);
-        params.bind(&mut builder);
-        let kernel = builder
-            .build()
-            .map_err(|e| device.error(&format!("creating the {name} kernel"), e))?;
+        let mut params = values.params(0, &accum, &rays);
         let set = |band: &BandParams, params: &SampleParams| {
             band.set(&kernel)
                 .and_then(|()| params.set(&kernel))
@@ -664,6 +667,188 @@ impl<'d> ClTracer<'d> {
             }
         }
         Ok(times)
+    }
+
+    /// The sample kernel of `settings`' mode, created with its arguments bound, and an
+    /// accumulation image of `rows` rows for `region` of an image `width` pixels wide.
+    fn sample_setup(
+        &mut self,
+        camera: &Pinhole,
+        settings: &SampleSettings,
+        width: u32,
+        region: Region,
+        rows: usize,
+    ) -> Result<SampleSetup> {
+        let device = self.device;
+        let w = region.width() as usize;
+        let kernel = match settings.lighting {
+            Lighting::Ao { .. } => Kernel::SampleAo,
+            Lighting::Shadow { .. } => Kernel::SampleShadow,
+            Lighting::Path { .. } => Kernel::SamplePath,
+        };
+        require_kernel(&self.program, kernel)?;
+        let name = kernel.name();
+        if self.lights.is_none() {
+            self.set_lights(&[Material::default()], &Emitters::default())?;
+        }
+        let lights = self.lights.as_ref().expect("set above");
+        let accum = PitchedBuffer::<Long4>::read_write(device, w, rows)?;
+        let rays = ocl::Buffer::<u32>::builder()
+            .queue(device.queue.clone())
+            .flags(ocl::flags::MEM_READ_WRITE)
+            .len(accum.pitch * rows)
+            .build()
+            .map_err(|e| device.error("allocating the ray counts", e))?;
+        let (ao_samples, ao_distance, light, max_bounces) = match settings.lighting {
+            Lighting::Ao { samples, distance } => (samples, distance, Float4::zero(), 0),
+            Lighting::Shadow { light } => {
+                let l = match light {
+                    Light::Directional(d) => Float4::new(d.x, d.y, d.z, 0.0),
+                    Light::Point(p) => Float4::new(p.x, p.y, p.z, 1.0),
+                };
+                (0, 0.0, l, 0)
+            }
+            Lighting::Path { max_bounces } => (0, 0.0, Float4::zero(), max_bounces),
+        };
+        let values = SampleValues {
+            offset: settings.offset,
+            seed: settings.seed,
+            ao_samples,
+            ao_distance,
+            light,
+            max_bounces,
+            col0: region.x0,
+            col_end: region.x1,
+        };
+        let light_params = LightParams {
+            materials: &lights.materials,
+            emitters: &lights.emitters,
+            emitter_cdf: &lights.cdf,
+            emitter_count: lights.count,
+            emitter_area: lights.area,
+        };
+        // The band (row0, row_end) and the sample change from launch to launch.
+        let band = BandParams::new(camera, width);
+        let mut builder = kernel_builder(device, &self.program, kernel, &self.scene)?;
+        light_params.bind(&mut builder);
+        band.bind(&mut builder);
+        values.params(0, &accum, &rays).bind(&mut builder);
+        let kernel = builder
+            .build()
+            .map_err(|e| device.error(&format!("creating the {name} kernel"), e))?;
+        Ok(SampleSetup {
+            kernel,
+            accum,
+            rays,
+            band,
+            values,
+            name,
+        })
+    }
+
+    /// Starts sums of `region` (of an image `width` pixels wide) that stay on the device
+    /// while [`ClTracer::add_samples`] adds units of rows and samples to them, read back once
+    /// by [`ClTracer::finish_samples`]: how one device of several takes its share of a
+    /// frame. `None` where the region's sums do not fit in one device image.
+    pub(crate) fn begin_samples(
+        &mut self,
+        camera: &Pinhole,
+        settings: &SampleSettings,
+        width: u32,
+        region: Region,
+    ) -> Result<Option<SampleSession>> {
+        let (w, h) = (region.width() as usize, region.height() as usize);
+        if capacity::<Long4>(self.device, self.image_budget, w, h) < h {
+            return Ok(None);
+        }
+        let mut setup = self.sample_setup(camera, settings, width, region, h)?;
+        // The accumulation image's row 0 is the region's first row.
+        setup.band.row0 = region.y0;
+        let device = self.device;
+        setup
+            .accum
+            .buffer
+            .cmd()
+            .fill(Long4::zero(), None)
+            .enq()
+            .map_err(|e| device.error("clearing the accumulation image", e))?;
+        setup
+            .rays
+            .cmd()
+            .fill(0u32, None)
+            .enq()
+            .map_err(|e| device.error("clearing the ray counts", e))?;
+        self.scene.clear_status(device)?;
+        Ok(Some(SampleSession {
+            setup,
+            width,
+            region,
+        }))
+    }
+
+    /// Adds the samples `samples` of the rows `rows` (image rows inside the session's
+    /// region) to the session's sums; `stop` is checked after each launch. Returns the
+    /// kernels' device time, ms.
+    pub(crate) fn add_samples(
+        &mut self,
+        session: &mut SampleSession,
+        rows: std::ops::Range<u32>,
+        samples: std::ops::Range<u32>,
+        stop: &std::sync::atomic::AtomicBool,
+    ) -> Result<f64> {
+        let device = self.device;
+        let SampleSetup {
+            kernel,
+            accum,
+            rays,
+            band,
+            values,
+            name,
+        } = &mut session.setup;
+        let x0 = session.region.x0 as usize;
+        let w = session.region.width() as usize;
+        band.row_end = rows.end;
+        let mut ms = 0.0;
+        for sample in samples {
+            band.set(kernel)
+                .and_then(|()| values.params(sample, accum, rays).set(kernel))
+                .map_err(|e| device.error(&format!("setting the arguments of {name}"), e))?;
+            let origin = [x0, rows.start as usize];
+            ms += launch_rect(device, kernel, self.local, origin, [w, rows.len()])?;
+            if stop.load(std::sync::atomic::Ordering::Relaxed) {
+                break;
+            }
+        }
+        Ok(ms)
+    }
+
+    /// The session's sums, read back, and its rays.
+    pub(crate) fn finish_samples(&mut self, session: SampleSession) -> Result<Accumulation> {
+        let device = self.device;
+        let (w, h) = (
+            session.region.width() as usize,
+            session.region.height() as usize,
+        );
+        let setup = &session.setup;
+        let mut host = vec![Long4::zero(); w * h];
+        setup.accum.read_rows(device, h, &mut host)?;
+        let mut counts = vec![0u32; setup.accum.pitch * h];
+        setup
+            .rays
+            .read(&mut counts)
+            .enq()
+            .map_err(|e| device.error("reading the ray counts back", e))?;
+        self.scene.check_status(device)?;
+        let height = session.region.y1;
+        let mut acc = Accumulation::of_region(session.width, height, session.region);
+        for (o, v) in acc.pixels.iter_mut().zip(&host) {
+            *o = [v[0], v[1], v[2], v[3]];
+        }
+        acc.rays = counts
+            .chunks(setup.accum.pitch)
+            .map(|row| row[..w].iter().map(|&c| c as u64).sum::<u64>())
+            .sum();
+        Ok(acc)
     }
 
     /// Renders one frame. `progress` shows a bar on stderr when the render looks long.

@@ -25,6 +25,12 @@ use crate::report::Progress;
 
 /// The longest a unit is meant to take, so that speeds are re-measured and a stop is seen.
 const MAX_UNIT_SECONDS: f64 = 2.0;
+/// Bands of rows the region is cut into at least: a device's first unit, one sample of a
+/// band, measures its speed without holding up the frame much. Not more: a GPU waits for
+/// each launch, and a launch over a small band is short enough for the host's latency
+/// (worse with a busy CPU device beside it) to cost (measured: 16 bands cost an H200 14%
+/// beside a 16-core PoCL device).
+const MIN_BANDS: u64 = 4;
 
 /// What one device did for the frame.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
@@ -136,7 +142,9 @@ pub(crate) fn render_samples(
     let (width, height) = accumulation.image_size();
     let spp = samples.len() as u64;
     // Enough units for every device to get several, even at a few samples per pixel.
-    let wanted = (8 * renderers.len() as u64).div_ceil(spp.max(1));
+    let wanted = (8 * renderers.len() as u64)
+        .div_ceil(spp.max(1))
+        .max(MIN_BANDS);
     let bands = wanted.clamp(1, region.height() as u64) as u32;
     let queue = Mutex::new(Queue {
         bands: (0..bands)
@@ -160,6 +168,7 @@ pub(crate) fn render_samples(
         spp,
         "samples",
     );
+    // Pixel samples done (for the bar) and the frame's sums.
     let done = Mutex::new((0u64, &mut *accumulation));
     let failed = AtomicBool::new(false);
     let shares: Vec<Result<DeviceShare>> = std::thread::scope(|s| {
@@ -174,6 +183,35 @@ pub(crate) fn render_samples(
                         ..DeviceShare::default()
                     };
                     let stopped = || stop.load(Ordering::Relaxed) || failed.load(Ordering::Relaxed);
+                    // PoCL compiles a kernel at its first launch, once for a launch from the
+                    // origin and once for one from elsewhere: two one-pixel launches do it
+                    // before the first unit, which would otherwise measure the compiler.
+                    for at in [0, 1] {
+                        let (x, y) = (
+                            region.x0 + at.min(region.width() - 1),
+                            region.y0 + at.min(region.height() - 1),
+                        );
+                        let pixel = Region {
+                            x0: x,
+                            y0: y,
+                            x1: x + 1,
+                            y1: y + 1,
+                        };
+                        let mut warm = Accumulation::of_region(width, height, pixel);
+                        renderer
+                            .render_samples(
+                                camera,
+                                settings,
+                                samples.start..samples.start + 1,
+                                &mut warm,
+                                stop,
+                                false,
+                            )
+                            .inspect_err(|_| failed.store(true, Ordering::Relaxed))?;
+                    }
+                    let mut session = renderer
+                        .begin_samples(camera, settings, region)
+                        .inspect_err(|_| failed.store(true, Ordering::Relaxed))?;
                     loop {
                         if stopped() {
                             break;
@@ -194,17 +232,28 @@ pub(crate) fn render_samples(
                             unit.map(|(b, s)| (q.bands[b].region, s))
                         };
                         let Some((band, range)) = unit else { break };
-                        let mut part = Accumulation::of_region(width, height, band);
                         let began = Instant::now();
-                        let times = renderer
-                            .render_samples(camera, settings, range, &mut part, stop, false)
-                            .inspect_err(|_| failed.store(true, Ordering::Relaxed))?;
+                        let work = range.len() as u64 * band.pixels() as u64;
+                        let kernel_ms = match session.as_mut() {
+                            // The sums stay on the device: the unit is its launches alone.
+                            Some(session) => renderer
+                                .add_samples(session, band.y0..band.y1, range, stop)
+                                .inspect_err(|_| failed.store(true, Ordering::Relaxed))?,
+                            None => {
+                                let mut part = Accumulation::of_region(width, height, band);
+                                let times = renderer
+                                    .render_samples(camera, settings, range, &mut part, stop, false)
+                                    .inspect_err(|_| failed.store(true, Ordering::Relaxed))?;
+                                let mut done = done.lock().expect("no thread panics holding it");
+                                add_into(done.1, &part);
+                                times.trace_ms
+                            }
+                        };
                         let secs = began.elapsed().as_secs_f64();
-                        let work: u64 = part.pixels.iter().map(|p| p[3] as u64).sum();
                         share.pixel_samples += work;
                         share.units += 1;
                         share.busy_ms += secs * 1e3;
-                        share.kernel_ms += times.trace_ms;
+                        share.kernel_ms += kernel_ms;
                         {
                             let mut q = queue.lock().expect("no thread panics holding it");
                             // The speed over everything done so far: later units are larger.
@@ -213,10 +262,19 @@ pub(crate) fn render_samples(
                             q.in_flight[d] = None;
                         }
                         let mut done = done.lock().expect("no thread panics holding it");
-                        let (count, acc) = &mut *done;
-                        add_into(acc, &part);
-                        *count += work;
-                        bar.set_position(*count / region.pixels() as u64);
+                        done.0 += work;
+                        bar.set_position(done.0 / region.pixels() as u64);
+                    }
+                    if let Some(session) = session {
+                        let began = Instant::now();
+                        let sums = renderer
+                            .finish_samples(session)
+                            .inspect_err(|_| failed.store(true, Ordering::Relaxed))?;
+                        share.busy_ms += began.elapsed().as_secs_f64() * 1e3;
+                        // Stopped early, a unit holds fewer samples than it was given.
+                        share.pixel_samples = sums.pixels.iter().map(|p| p[3] as u64).sum();
+                        let mut done = done.lock().expect("no thread panics holding it");
+                        add_into(done.1, &sums);
                     }
                     Ok(share)
                 })
