@@ -376,6 +376,10 @@ fn render_with(
         mesh.degenerate_count()
     ));
     let bounds = mesh.bounds();
+    let camera_settings = match &scene.animation {
+        Some(a) => a.settings_at(0, &req.camera, &scene.camera, &bounds)?,
+        None => camera_settings,
+    };
     let camera = Camera::from_settings(&camera_settings, &bounds)?;
     v.detail(format!(
         "camera: eye {:?}, look-at {:?}, up {:?}, fov {}, {}x{}",
