@@ -7,9 +7,10 @@
 //! - [`error`], [`geometry`]: the error type; rays and boxes.
 //! - [`mesh`], [`camera`], [`interrupt`]: the triangle mesh every stage reads; the pinhole
 //!   camera and its exact pixel-to-ray arithmetic; the Ctrl-C flag long work polls.
-//! - [`intersect`]: the stored triangle, the watertight ray/triangle test and the robust
-//!   slab test (mirrored in `cl/intersect.cl`), and [`intersect::ClosestHit`], what every
-//!   host tracer answers.
+//! - [`intersect`], [`animation`]: the stored triangle, the watertight ray/triangle test
+//!   and the robust slab test (mirrored in `cl/intersect.cl`), and
+//!   [`intersect::ClosestHit`], what every host tracer answers; the camera of each frame of
+//!   a scene's keyframes or turntable.
 //! - [`material`], [`brute`], [`bvh`]: materials per triangle; brute force on the host;
 //!   the SAH builders and the device layouts (`bin32`, `bin64`, `wide4`, `wide8`, `cwbvh`),
 //!   each with its host traversal or box test.
@@ -34,6 +35,7 @@ pub mod camera;
 pub mod interrupt;
 pub mod mesh;
 
+pub mod animation;
 pub mod intersect;
 
 pub mod brute;

@@ -12,7 +12,7 @@ const LAYERS: &[&[&str]] = &[
     // Pure values: no I/O, no OpenCL, no command line.
     &["error", "geometry", "hash"],
     &["mesh", "camera", "interrupt"],
-    &["intersect"],
+    &["intersect", "animation"],
     &["material", "brute", "bvh"],
     &["render", "report"],
     // Files in and out.

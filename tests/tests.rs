@@ -10,6 +10,7 @@ mod bvh_optimize;
 mod cli;
 mod commands;
 mod concurrency;
+mod frames;
 mod fuzz_regressions;
 mod interrupt;
 mod layout;

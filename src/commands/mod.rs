@@ -3,6 +3,7 @@
 pub mod bench;
 pub mod bvh;
 pub mod devices;
+pub mod frames;
 pub mod merge;
 pub mod render;
 pub mod tune;

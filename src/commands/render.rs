@@ -85,6 +85,11 @@ pub struct RenderRequest {
     pub program_cache: Option<PathBuf>,
     /// How much goes to stderr: the summary and stage timings, details with `--verbose`.
     pub verbosity: Verbosity,
+    /// `--frames`: render these frames of the scene's camera animation instead, each to
+    /// the outputs' frame patterns ([`super::frames`]).
+    pub frames: Option<super::frames::Frames>,
+    /// The frame of the scene's camera animation a single render takes its camera from.
+    pub frame: u32,
 }
 
 /// What a finished render reports.
@@ -234,8 +239,16 @@ pub(crate) fn sample_settings(
 /// device) and the stage timings, which add up to the total. Interrupted (Ctrl-C) once
 /// every pixel has a sample, the image is written with the samples taken and the ending is
 /// [`Ending::Partial`]; before that, nothing is written and the error is
-/// [`Error::Interrupted`].
+/// [`Error::Interrupted`]. With `frames`, renders each frame so ([`super::frames`]).
 pub fn render(req: &RenderRequest) -> Result<Ending> {
+    match &req.frames {
+        Some(frames) => super::frames::render_frames(req, frames),
+        None => super::frames::refuse_patterns(req).and_then(|()| render_single(req)),
+    }
+}
+
+/// One image: [`render`] without `frames`.
+pub(crate) fn render_single(req: &RenderRequest) -> Result<Ending> {
     let start = std::time::Instant::now();
     if let Some(json) = &req.json {
         output::check_output(json)?;
@@ -400,6 +413,10 @@ fn render_with(
         mesh.degenerate_count()
     ));
     let bounds = mesh.bounds();
+    let camera_settings = match &scene.animation {
+        Some(a) => a.settings_at(req.frame, &req.camera, &scene.camera, &bounds)?,
+        None => camera_settings,
+    };
     let camera = Camera::from_settings(&camera_settings, &bounds)?;
     v.detail(format!(
         "camera: eye {:?}, look-at {:?}, up {:?}, fov {}, {}x{}",

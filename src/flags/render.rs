@@ -9,6 +9,7 @@ use clap::{Args, ValueEnum};
 
 use cltrace::bvh::Layout;
 use cltrace::camera::CameraSettings;
+use cltrace::commands::frames::{FrameRange, Frames};
 use cltrace::commands::render::RenderRequest;
 use cltrace::input::scene_file::RenderSettings;
 use cltrace::render::integrator::{Region, parse_sample_range};
@@ -68,6 +69,18 @@ pub struct RenderArgs {
     /// the host instead of stopping with the error
     #[arg(long, value_enum, value_name = "WHERE")]
     fallback: Option<Fallback>,
+
+    /// Render frames of the scene file's camera animation ([[camera.keyframe]] tables or a
+    /// [camera.turntable]): A..B is frames A to B-1, A..=B frames A to B, N frame N. Each
+    /// frame is a render of its own, to -o's frame pattern: %d, or %0Nd for N digits
+    /// (out_%04d.png); --hits and --json need one too. Without --frames, an animated scene
+    /// renders frame 0
+    #[arg(long, value_name = "A..B")]
+    frames: Option<FrameRange>,
+
+    /// With --frames: leave each frame whose outputs all exist as it is (to resume a run)
+    #[arg(long, requires = "frames")]
+    skip_existing: bool,
 
     /// Print nothing but errors
     #[arg(short, long, conflicts_with = "verbose")]
@@ -196,6 +209,11 @@ impl RenderArgs {
             tune_cache: cltrace::tune::cache_path(),
             program_cache: cltrace::device::program_cache_folder(),
             verbosity: Verbosity::from_flags(self.quiet, self.verbose),
+            frames: self.frames.map(|range| Frames {
+                range,
+                skip_existing: self.skip_existing,
+            }),
+            frame: 0,
         }
     }
 }

@@ -17,11 +17,39 @@
 //! shade = "path"               # normal, depth, lambert, ao, shadow, path
 //! spp = 64                     # samples per pixel of ao, shadow and path
 //! ```
+//!
+//! The camera may be animated, for `cltrace render --frames` ([`crate::animation`]), by
+//! keyframes or by a turntable, not both:
+//!
+//! ```toml
+//! [[camera.keyframe]]          # as many as needed, frames strictly increasing
+//! frame = 0                    # a whole number, 0 or more
+//! eye = [0.0, 1.0, 4.0]        # any of eye, look_at, up, fov; at least one
+//! fov = 45.0
+//!
+//! [[camera.keyframe]]
+//! frame = 48
+//! eye = [4.0, 1.0, 0.0]        # each value linear between the keys that give it, held
+//!                              # before the first and after the last; one no key gives
+//!                              # is the [camera] table's (else the auto framing's)
+//! ```
+//!
+//! ```toml
+//! [camera.turntable]           # turns eye (and up) about an axis through look_at
+//! frames = 120                 # frames the turn takes: frame 120 is turned by `degrees`
+//! degrees = 360.0              # default 360; right-handed about the axis
+//! axis = [0.0, 1.0, 0.0]       # default: the camera's up
+//! ```
+//!
+//! A turntable turns the camera the [camera] table, the flags and the auto framing give;
+//! a flag beats a keyframe as it beats any scene setting.
 
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
+use toml::Spanned;
 
+use crate::animation::{Animation, Keyframe, Turntable};
 use crate::bvh::Layout;
 use crate::camera::CameraSettings;
 use crate::error::{Error, Result};
@@ -143,6 +171,8 @@ pub struct SceneDescription {
     /// The `[camera]` table, already checked as far as it can be without the mesh; the
     /// command line's settings override it.
     pub camera: CameraSettings,
+    /// The `[camera]` table's keyframes or turntable, if any.
+    pub(crate) animation: Option<Animation>,
     pub(crate) render: RenderSettings,
 }
 
@@ -152,9 +182,67 @@ struct SceneFile {
     mesh: Option<PathBuf>,
     generator: Option<Generator>,
     #[serde(default)]
-    camera: CameraSettings,
+    camera: CameraTable,
     #[serde(default)]
     render: RenderSettings,
+}
+
+/// The `[camera]` table: [`CameraSettings`]' keys (listed again, as serde's `flatten` would
+/// let unknown keys through and lose their lines) and the animation's.
+#[derive(Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraTable {
+    eye: Option<[f32; 3]>,
+    look_at: Option<[f32; 3]>,
+    up: Option<[f32; 3]>,
+    fov: Option<f32>,
+    width: Option<u32>,
+    height: Option<u32>,
+    // Spanned, so that a bad key's error names its line.
+    keyframe: Option<Vec<Spanned<Keyframe>>>,
+    turntable: Option<Spanned<Turntable>>,
+}
+
+impl CameraTable {
+    /// The settings, and the animation checked; `text` and `path` place its errors.
+    fn split(self, text: &str, path: &Path) -> Result<(CameraSettings, Option<Animation>)> {
+        let settings = CameraSettings {
+            eye: self.eye,
+            look_at: self.look_at,
+            up: self.up,
+            fov: self.fov,
+            width: self.width,
+            height: self.height,
+        };
+        let at = |span: std::ops::Range<usize>, message: String| {
+            Error::input_at(path, line_of(text, span.start), message)
+        };
+        let animation = match (self.keyframe, self.turntable) {
+            (None, None) => None,
+            (Some(_), Some(turntable)) => {
+                return Err(at(
+                    turntable.span(),
+                    "give either [[camera.keyframe]] tables or a [camera.turntable], not both"
+                        .into(),
+                ));
+            }
+            (Some(keys), None) => {
+                let spans: Vec<_> = keys.iter().map(Spanned::span).collect();
+                let keys = keys.into_iter().map(Spanned::into_inner).collect();
+                Some(
+                    Animation::keyframes(keys).map_err(|(i, message)| match spans.get(i) {
+                        Some(span) => at(span.clone(), message),
+                        None => Error::input(path, message),
+                    })?,
+                )
+            }
+            (None, Some(turntable)) => {
+                let span = turntable.span();
+                Some(Animation::turntable(turntable.into_inner()).map_err(|m| at(span, m))?)
+            }
+        };
+        Ok((settings, animation))
+    }
 }
 
 impl SceneDescription {
@@ -196,6 +284,7 @@ impl SceneDescription {
         SceneDescription {
             mesh: MeshSource::File(path.to_path_buf()),
             camera: CameraSettings::default(),
+            animation: None,
             render: RenderSettings::default(),
         }
     }
@@ -212,7 +301,8 @@ impl SceneDescription {
         // What can be checked without the mesh is checked here, so that the error names
         // the scene file.
         let in_scene = |e: Error| Error::input(path, e.to_string());
-        crate::camera::check_settings(&file.camera).map_err(in_scene)?;
+        let (camera, animation) = file.camera.split(text, path)?;
+        crate::camera::check_settings(&camera).map_err(in_scene)?;
         let mesh = match (file.mesh, file.generator) {
             (Some(mesh), None) => MeshSource::File(base.join(mesh)),
             (None, Some(generator)) => {
@@ -234,7 +324,8 @@ impl SceneDescription {
         };
         Ok(SceneDescription {
             mesh,
-            camera: file.camera,
+            camera,
+            animation,
             render: file.render,
         })
     }
@@ -307,6 +398,75 @@ mod tests {
     fn wrong_types_are_errors() {
         assert!(parse("mesh = \"a.obj\"\n[camera]\nwidth = \"wide\"\n").is_err());
         assert!(parse("mesh = 3\n").is_err());
+    }
+
+    const KEYS: &str = "mesh = \"a.obj\"\n[camera]\nwidth = 64\n\
+                        [[camera.keyframe]]\nframe = 0\neye = [0, 0, 4]\n\
+                        [[camera.keyframe]]\nframe = 10\neye = [4, 0, 0]\nfov = 30\n";
+
+    #[test]
+    fn keyframes_parse_into_an_animation() {
+        let s = parse(KEYS).unwrap();
+        assert_eq!(s.camera.width, Some(64));
+        assert_eq!(s.camera.eye, None);
+        let at = |frame| {
+            s.animation
+                .as_ref()
+                .unwrap()
+                .settings_at(
+                    frame,
+                    &CameraSettings::default(),
+                    &s.camera,
+                    &crate::geometry::Aabb::from_points([glam::Vec3::ZERO, glam::Vec3::ONE]),
+                )
+                .unwrap()
+        };
+        assert_eq!(at(5).eye, Some([2.0, 0.0, 2.0]));
+        assert_eq!(at(5).fov, Some(30.0));
+        assert_eq!(at(5).width, Some(64));
+        assert!(parse("mesh = \"a.obj\"\n").unwrap().animation.is_none());
+    }
+
+    #[test]
+    fn a_turntable_parses_into_an_animation() {
+        let s = parse("mesh = \"a.obj\"\n[camera.turntable]\nframes = 12\n").unwrap();
+        assert!(s.animation.is_some());
+        assert_eq!(s.camera, CameraSettings::default());
+    }
+
+    #[test]
+    fn bad_animations_are_errors_at_their_line() {
+        let turntable = "mesh = \"a.obj\"\n[camera.turntable]\nframes = 4\n";
+        for (text, line, words) in [
+            // A bad key's error is at its [[camera.keyframe]] line (KEYS' second is line 7).
+            (KEYS.replace("frame = 10", "frame = 0"), 7, "increasing"),
+            (KEYS.replace("fov = 30", "fov = 200"), 7, "field of view"),
+            // Serde's errors are at the value.
+            (KEYS.replace("frame = 10", "frame = -1"), 8, "-1"),
+            (KEYS.replace("fov = 30", "zoom = 2"), 10, "zoom"),
+            (
+                format!("{KEYS}[camera.turntable]\nframes = 4\n"),
+                11,
+                "not both",
+            ),
+            (
+                format!("{turntable}[[camera.keyframe]]\nframe = 1\nfov = 9\n"),
+                2,
+                "not both",
+            ),
+            (
+                turntable.replace("frames = 4", "frames = 0"),
+                2,
+                "frames = 0",
+            ),
+            (format!("{turntable}axis = [0, 0, 0]\n"), 2, "axis"),
+            (format!("{turntable}speed = 2\n"), 4, "speed"),
+        ] {
+            let msg = parse(&text).unwrap_err().to_string();
+            assert!(msg.starts_with(&format!("s.toml:{line}:")), "{text}\n{msg}");
+            assert!(msg.contains(words), "{msg}");
+            assert!(!msg.contains('\n'), "{msg}");
+        }
     }
 
     #[test]
