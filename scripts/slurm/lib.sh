@@ -27,8 +27,9 @@ grid_columns() {
     echo "$columns"
 }
 
-# The cltrace render flags of task $1: its tile (--region X0,Y0,X1,Y1) or its share of the
-# samples (--samples A..B); ends exclusive, shares as even as integers allow.
+# The cltrace render flags of task $1: its tile (--region X0,Y0,X1,Y1, with all --spp
+# samples) or its share of the samples (--samples A..B, which stands for --spp); ends
+# exclusive, shares as even as integers allow.
 task_flags() {
     local id=$1
     if [[ $SPLIT == tiles ]]; then
@@ -37,7 +38,7 @@ task_flags() {
         rows=$((TASKS / columns))
         column=$((id % columns))
         row=$((id / columns))
-        echo "--region $((column * WIDTH / columns)),$((row * HEIGHT / rows)),$(((column + 1) * WIDTH / columns)),$(((row + 1) * HEIGHT / rows))"
+        echo "--region $((column * WIDTH / columns)),$((row * HEIGHT / rows)),$(((column + 1) * WIDTH / columns)),$(((row + 1) * HEIGHT / rows)) --spp $SPP"
     else
         echo "--samples $((id * SPP / TASKS))..$(((id + 1) * SPP / TASKS))"
     fi
