@@ -23,5 +23,6 @@ mod parts;
 mod program_cache;
 mod run_report;
 mod secondary;
+mod slurm;
 mod tracers;
 mod watertight;
