@@ -115,20 +115,8 @@ fn add_parts(paths: &[PathBuf], parts: &[Part]) -> Result<Accumulation> {
     let (width, height) = first.accumulation.image_size();
     let mut acc = Accumulation::new(width, height);
     for (i, part) in parts.iter().enumerate() {
-        let p = &part.accumulation;
-        let r = p.region;
-        for (row, src) in p.pixels.chunks(r.width() as usize).enumerate() {
-            let y = r.y0 as usize + row;
-            let dst = &mut acc.pixels[y * width as usize + r.x0 as usize..][..src.len()];
-            for (d, s) in dst.iter_mut().zip(src) {
-                for c in 0..4 {
-                    d[c] = d[c]
-                        .checked_add(s[c])
-                        .ok_or_else(|| Error::Invalid(format!("{}: the sums overflow", name(i))))?;
-                }
-            }
-        }
-        acc.rays += p.rays;
+        acc.add(&part.accumulation)
+            .ok_or_else(|| Error::Invalid(format!("{}: the sums overflow", name(i))))?;
     }
     let empty = acc.pixels.iter().position(|p| p[3] == 0);
     if let Some(i) = empty {

@@ -597,16 +597,7 @@ impl<'d> ClTracer<'d> {
         let mut group0 = 0usize;
         'groups: while group0 < h {
             let group_rows = capacity.min(h - group0);
-            accum
-                .buffer
-                .cmd()
-                .fill(Long4::zero(), None)
-                .enq()
-                .map_err(|e| device.error("clearing the accumulation image", e))?;
-            rays.cmd()
-                .fill(0u32, None)
-                .enq()
-                .map_err(|e| device.error("clearing the ray counts", e))?;
+            clear_sums(device, &accum, &rays)?;
             // The accumulation image's row 0 is the group's first row; bands run inside it.
             band.row0 = (y0 + group0) as u32;
             let mut stopped = false;
@@ -765,19 +756,7 @@ impl<'d> ClTracer<'d> {
         // The accumulation image's row 0 is the region's first row.
         setup.band.row0 = region.y0;
         let device = self.device;
-        setup
-            .accum
-            .buffer
-            .cmd()
-            .fill(Long4::zero(), None)
-            .enq()
-            .map_err(|e| device.error("clearing the accumulation image", e))?;
-        setup
-            .rays
-            .cmd()
-            .fill(0u32, None)
-            .enq()
-            .map_err(|e| device.error("clearing the ray counts", e))?;
+        clear_sums(device, &setup.accum, &setup.rays)?;
         self.scene.clear_status(device)?;
         Ok(Some(SampleSession {
             setup,
@@ -1087,6 +1066,24 @@ fn kernel_builder<'b>(
 /// Enqueues a kernel, waits for it, and returns its device time in milliseconds.
 /// Launches an image kernel over rows `y0 .. y0 + rows` of a `width`-pixel image, the
 /// global size rounded up to whole work-groups; returns its device time in ms.
+/// Zeroes an accumulation image and its ray counts.
+fn clear_sums(
+    device: &ClDevice,
+    accum: &PitchedBuffer<Long4>,
+    rays: &ocl::Buffer<u32>,
+) -> Result<()> {
+    accum
+        .buffer
+        .cmd()
+        .fill(Long4::zero(), None)
+        .enq()
+        .map_err(|e| device.error("clearing the accumulation image", e))?;
+    rays.cmd()
+        .fill(0u32, None)
+        .enq()
+        .map_err(|e| device.error("clearing the ray counts", e))
+}
+
 fn launch_rows(
     device: &ClDevice,
     kernel: &ocl::Kernel,

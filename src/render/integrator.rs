@@ -473,6 +473,25 @@ impl Accumulation {
         (self.width, self.height)
     }
 
+    /// Adds `part`'s sums, counts and rays (of a region inside this one's) into this
+    /// accumulation; `None`, with the sums partly added, if a sum would overflow.
+    pub(crate) fn add(&mut self, part: &Accumulation) -> Option<()> {
+        let (r, p) = (self.region, part.region);
+        let w = p.width() as usize;
+        for (row, src) in part.pixels.chunks(w.max(1)).enumerate() {
+            let y = (p.y0 - r.y0) as usize + row;
+            let x = (p.x0 - r.x0) as usize;
+            let dst = &mut self.pixels[y * r.width() as usize + x..][..w];
+            for (d, s) in dst.iter_mut().zip(src) {
+                for c in 0..4 {
+                    d[c] = d[c].checked_add(s[c])?;
+                }
+            }
+        }
+        self.rays += part.rays;
+        Some(())
+    }
+
     /// Mean radiance per pixel of the region (black where no sample was taken).
     pub fn radiance(&self) -> Vec<[f32; 3]> {
         self.pixels.iter().map(mean_radiance).collect()

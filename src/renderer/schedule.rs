@@ -24,6 +24,8 @@ use crate::error::{Error, Result};
 use crate::render::integrator::{Accumulation, Region, SampleSettings};
 use crate::report::Progress;
 
+/// Sums of at most 65,536 samples of at most 2^42 each fit (`to_fixed`).
+const OVERFLOW: &str = "a frame's sums fit 63 bits";
 /// The longest a unit is meant to take, so that speeds are re-measured and a stop is seen.
 const MAX_UNIT_SECONDS: f64 = 2.0;
 /// A device slower than this share of all the devices' speed together stops after its
@@ -257,7 +259,7 @@ pub(crate) fn render_samples(
                                     .render_samples(camera, settings, range, &mut part, stop, false)
                                     .inspect_err(|_| failed.store(true, Ordering::Relaxed))?;
                                 let mut done = done.lock().expect("no thread panics holding it");
-                                add_into(done.1, &part);
+                                done.1.add(&part).expect(OVERFLOW);
                                 times.trace_ms
                             }
                         };
@@ -286,7 +288,7 @@ pub(crate) fn render_samples(
                         // Stopped early, a unit holds fewer samples than it was given.
                         share.pixel_samples = sums.pixels.iter().map(|p| p[3] as u64).sum();
                         let mut done = done.lock().expect("no thread panics holding it");
-                        add_into(done.1, &sums);
+                        done.1.add(&sums).expect(OVERFLOW);
                     }
                     Ok(share)
                 })
@@ -314,23 +316,6 @@ pub(crate) fn render_samples(
         ));
     }
     Ok(out)
-}
-
-/// Adds `part`'s sums (of a region inside `acc`'s) into `acc`.
-fn add_into(acc: &mut Accumulation, part: &Accumulation) {
-    let (r, p) = (acc.region, part.region);
-    let w = p.width() as usize;
-    for (row, src) in part.pixels.chunks(w.max(1)).enumerate() {
-        let y = (p.y0 - r.y0) as usize + row;
-        let x = (p.x0 - r.x0) as usize;
-        let dst = &mut acc.pixels[y * r.width() as usize + x..][..w];
-        for (d, s) in dst.iter_mut().zip(src) {
-            for c in 0..4 {
-                d[c] += s[c];
-            }
-        }
-    }
-    acc.rays += part.rays;
 }
 
 #[cfg(test)]
