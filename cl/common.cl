@@ -25,10 +25,14 @@ typedef struct {
     float v2[3]; uint pad;
 } Triangle;
 
-/* A diffuse material: albedo and emitted radiance. */
+/* A material (src/material/mod.rs): base colour and emission with their textures, the
+ * glTF metallic-roughness factors, the normal map, the cut-out mask and the occlusion map.
+ * A texture slot is an index into the texture table, or NO_TEXTURE. */
 typedef struct {
-    float albedo[3]; float pad0;
-    float emission[3]; float pad1;
+    float albedo[3]; int base_texture;
+    float emission[3]; int emission_texture;
+    float metallic; float roughness; int metallic_roughness_texture; int normal_texture;
+    float normal_scale; int alpha_texture; float alpha_cutoff; int occlusion_texture;
 } Material;
 
 /* One pixel's closest hit: the triangle's index in file order (MISS for none) and the

@@ -30,7 +30,15 @@ __kernel void probe_layout(__global uint* out) {
     out[i++] = OFFSET(Hit, t);
     out[i++] = sizeof(Material);
     out[i++] = OFFSET(Material, albedo);
+    out[i++] = OFFSET(Material, base_texture);
     out[i++] = OFFSET(Material, emission);
+    out[i++] = OFFSET(Material, emission_texture);
+    out[i++] = OFFSET(Material, metallic);
+    out[i++] = OFFSET(Material, normal_texture);
+    out[i++] = OFFSET(Material, normal_scale);
+    out[i++] = OFFSET(Material, alpha_texture);
+    out[i++] = OFFSET(Material, alpha_cutoff);
+    out[i++] = OFFSET(Material, occlusion_texture);
     out[i++] = sizeof(Bin64Node);
     out[i++] = OFFSET(Bin64Node, right_xy);
     out[i++] = OFFSET(Bin64Node, z);
@@ -71,4 +79,5 @@ __kernel void probe_constants(__global uint* out) {
     out[i++] = as_uint(RADIANCE_SCALE);
     out[i++] = as_uint(MAX_SAMPLE_RADIANCE);
     out[i++] = as_uint(ROBUST_EXIT);
+    out[i++] = (uint)NO_TEXTURE;
 }

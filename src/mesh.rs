@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{Mat3, Mat4, Vec2, Vec3};
 
 use crate::error::{Error, Result};
 use crate::geometry::Aabb;
@@ -27,6 +27,17 @@ pub struct Mesh {
     /// The triangles in input order, each as three indices into [`Mesh::positions`]; a
     /// triangle's position in this list is its primitive index in every later stage.
     pub triangles: Vec<[u32; 3]>,
+    /// Per-vertex shading normals, indexed like [`Mesh::positions`], or empty for none (the
+    /// renderer then computes smooth normals with a crease angle). A zero normal means "use
+    /// the triangle's own normal" at that corner.
+    pub normals: Vec<Vec3>,
+    /// Per-vertex texture coordinates, indexed like [`Mesh::positions`], or empty for none.
+    /// As in OBJ and PLY, `(0, 0)` is the image's bottom-left corner and v grows upwards
+    /// (the glTF loader flips its v to match).
+    pub uvs: Vec<Vec2>,
+    /// Per-vertex linear RGB colours multiplying the base colour, indexed like
+    /// [`Mesh::positions`], or empty for none (white).
+    pub colors: Vec<Vec3>,
 }
 
 impl Mesh {
@@ -35,6 +46,7 @@ impl Mesh {
         Mesh {
             positions,
             triangles,
+            ..Mesh::default()
         }
     }
 
@@ -67,12 +79,51 @@ impl Mesh {
             .count()
     }
 
-    /// Appends `other`'s triangles after this mesh's, keeping both orders.
+    /// Appends `other`'s triangles after this mesh's, keeping both orders. A vertex
+    /// attribute only one side has is filled on the other with its "none" value: a zero
+    /// normal (the triangle's own), texture coordinate (0, 0), white.
     pub fn append(&mut self, other: &Mesh) {
         let offset = self.positions.len() as u32;
+        let (mine, theirs) = (self.positions.len(), other.positions.len());
+        fn join<T: Copy>(a: &mut Vec<T>, b: &[T], mine: usize, theirs: usize, none: T) {
+            if a.is_empty() && b.is_empty() {
+                return;
+            }
+            a.resize(mine, none);
+            if b.is_empty() {
+                a.resize(mine + theirs, none);
+            } else {
+                a.extend_from_slice(b);
+            }
+        }
+        join(&mut self.normals, &other.normals, mine, theirs, Vec3::ZERO);
+        join(&mut self.uvs, &other.uvs, mine, theirs, Vec2::ZERO);
+        join(&mut self.colors, &other.colors, mine, theirs, Vec3::ONE);
         self.positions.extend_from_slice(&other.positions);
         self.triangles
             .extend(other.triangles.iter().map(|t| t.map(|v| v + offset)));
+    }
+
+    /// The mesh moved by `transform` (an affine matrix): positions as points, normals by
+    /// the inverse transpose and renormalised. A mirroring transform (negative determinant)
+    /// also reverses each triangle's winding, so that the front face stays the front face.
+    pub fn transformed(mut self, transform: Mat4) -> Mesh {
+        for p in &mut self.positions {
+            *p = transform.transform_point3(*p);
+        }
+        let linear = Mat3::from_mat4(transform);
+        let normal_matrix = linear.inverse().transpose();
+        for n in &mut self.normals {
+            if *n != Vec3::ZERO {
+                *n = (normal_matrix * *n).normalize_or_zero();
+            }
+        }
+        if linear.determinant() < 0.0 {
+            for t in &mut self.triangles {
+                t.swap(1, 2);
+            }
+        }
+        self
     }
 
     /// Rejects what no renderer can use: no triangles, an index past the vertex list, a
@@ -93,6 +144,18 @@ impl Mesh {
             ));
         }
         let n = self.positions.len();
+        for (what, len) in [
+            ("normals", self.normals.len()),
+            ("texture coordinates", self.uvs.len()),
+            ("colours", self.colors.len()),
+        ] {
+            if len != 0 && len != n {
+                return Err(Error::input(
+                    path,
+                    format!("the mesh has {len} vertex {what} for {n} vertices"),
+                ));
+            }
+        }
         for (i, tri) in self.triangles.iter().enumerate() {
             if let Some(&v) = tri.iter().find(|&&v| v as usize >= n) {
                 return Err(Error::input(
@@ -105,6 +168,18 @@ impl Mesh {
                     return Err(Error::input(
                         path,
                         format!("triangle {i} has a vertex with {problem}"),
+                    ));
+                }
+                let v = v as usize;
+                let finite = self.normals.get(v).is_none_or(|n| n.is_finite())
+                    && self.uvs.get(v).is_none_or(|t| t.is_finite())
+                    && self.colors.get(v).is_none_or(|c| c.is_finite());
+                if !finite {
+                    return Err(Error::input(
+                        path,
+                        format!(
+                            "triangle {i} has a vertex with a NaN or infinite normal, texture coordinate or colour"
+                        ),
                     ));
                 }
             }

@@ -73,7 +73,27 @@ fn device_structs_match_the_rust_structs() {
         ("Hit.t", offset_of!(Hit, t)),
         ("sizeof(Material)", size_of::<Material>()),
         ("Material.albedo", offset_of!(Material, albedo)),
+        ("Material.base_texture", offset_of!(Material, base_texture)),
         ("Material.emission", offset_of!(Material, emission)),
+        (
+            "Material.emission_texture",
+            offset_of!(Material, emission_texture),
+        ),
+        ("Material.metallic", offset_of!(Material, metallic)),
+        (
+            "Material.normal_texture",
+            offset_of!(Material, normal_texture),
+        ),
+        ("Material.normal_scale", offset_of!(Material, normal_scale)),
+        (
+            "Material.alpha_texture",
+            offset_of!(Material, alpha_texture),
+        ),
+        ("Material.alpha_cutoff", offset_of!(Material, alpha_cutoff)),
+        (
+            "Material.occlusion_texture",
+            offset_of!(Material, occlusion_texture),
+        ),
         ("sizeof(Bin64Node)", size_of::<Bin64Node>()),
         ("Bin64Node.right_xy", offset_of!(Bin64Node, right_xy)),
         ("Bin64Node.z", offset_of!(Bin64Node, z)),
@@ -134,6 +154,7 @@ fn device_constants_match_the_rust_constants() {
         ("RADIANCE_SCALE", RADIANCE_SCALE.to_bits()),
         ("MAX_SAMPLE_RADIANCE", MAX_SAMPLE_RADIANCE.to_bits()),
         ("ROBUST_EXIT", ROBUST_EXIT.to_bits()),
+        ("NO_TEXTURE", cltrace::material::NO_TEXTURE as u32),
     ];
     // The probe reports every constant the host defines for the kernels, none left out.
     let shared: Vec<&str> = shared_constants().iter().map(|c| c.0).collect();

@@ -250,6 +250,7 @@ fn lit_room() -> (Mesh, Materials) {
             Material::diffuse([0.2, 0.5, 0.8]),
         ],
         per_triangle: ids,
+        textures: Vec::new(),
     };
     (mesh, materials)
 }

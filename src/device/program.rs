@@ -108,6 +108,7 @@ pub fn shared_constants() -> Vec<(&'static str, Constant)> {
         ("RADIANCE_SCALE", F32(integrator::RADIANCE_SCALE)),
         ("MAX_SAMPLE_RADIANCE", F32(integrator::MAX_SAMPLE_RADIANCE)),
         ("ROBUST_EXIT", F32(crate::intersect::ROBUST_EXIT)),
+        ("NO_TEXTURE", I32(crate::material::NO_TEXTURE)),
     ]
 }
 

@@ -190,6 +190,7 @@ impl Generator {
                     per_triangle: (0..mesh.triangle_count())
                         .map(|i| (i >= spheres) as u32)
                         .collect(),
+                    textures: Vec::new(),
                 }
             }
             _ => Materials::default(),

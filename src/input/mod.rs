@@ -6,6 +6,7 @@ mod mtl;
 mod obj;
 mod ply;
 pub mod scene_file;
+pub mod texture;
 
 use std::io::Read;
 use std::path::Path;

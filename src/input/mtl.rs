@@ -144,6 +144,7 @@ pub(super) fn assign(
         Materials {
             list: materials,
             per_triangle,
+            textures: Vec::new(),
         },
         warnings,
     )
