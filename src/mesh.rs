@@ -8,7 +8,10 @@ use glam::{Mat3, Mat4, Vec2, Vec3};
 use crate::error::{Error, Result};
 use crate::geometry::Aabb;
 
+mod normals;
 mod polygon;
+
+pub use normals::DEFAULT_CREASE_ANGLE;
 
 pub use polygon::{EAR_CLIP_BUDGET, Triangulation, triangulate_polygon};
 

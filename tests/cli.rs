@@ -1141,7 +1141,8 @@ fn polygons_that_are_not_simple_were_fanned_without_a_word() {
 }
 
 /// Regression (issue 15): vertex normals, texture coordinates and colours were dropped
-/// without a word; `-v` notes that they are not used yet, in OBJ and PLY files.
+/// without a word; `-v` notes which were read (issue 16: they are used), in OBJ and PLY
+/// files.
 #[test]
 fn normals_texture_coordinates_and_colours_were_dropped_without_a_word() {
     let w = Work::new();
@@ -1175,7 +1176,7 @@ fn normals_texture_coordinates_and_colours_were_dropped_without_a_word() {
         (&ply, "vertex normals and vertex colours"),
         (&uv, "texture coordinates"),
     ] {
-        let want = format!("note: {}: its {what} are not used yet", mesh.display());
+        let want = format!("note: {}: read its {what}", mesh.display());
         let stderr = render_stderr(&w, mesh, &["-v"]);
         assert!(
             stderr.lines().any(|l| l == want),

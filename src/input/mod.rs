@@ -64,8 +64,8 @@ pub struct MeshFile {
     /// with: why the materials are grey although the file names some (a missing or broken
     /// MTL file), how many polygons could not be cut exactly.
     pub warnings: Vec<String>,
-    /// What the file holds that cltrace reads past without using yet (vertex normals,
-    /// texture coordinates, vertex colours), each a line for the verbose output.
+    /// What the verbose output says about the file besides its size: the vertex
+    /// attributes read, what was read past (unsupported glTF parts), each a line.
     pub notes: Vec<String>,
 }
 
@@ -120,7 +120,27 @@ fn parse(
         MeshFormat::Ply => ply::parse(path, bytes)?,
     };
     file.mesh.check(path)?;
+    let mut file = file;
+    file.notes.extend(attributes_note(path, &file.mesh));
     Ok(file)
+}
+
+/// The verbose note of the vertex attributes a mesh file gave, or `None` for none.
+pub(crate) fn attributes_note(path: &Path, mesh: &Mesh) -> Option<String> {
+    let what: Vec<&str> = [
+        (!mesh.normals.is_empty(), "vertex normals"),
+        (!mesh.uvs.is_empty(), "texture coordinates"),
+        (!mesh.colors.is_empty(), "vertex colours"),
+    ]
+    .into_iter()
+    .filter_map(|(has, what)| has.then_some(what))
+    .collect();
+    let list = match what.as_slice() {
+        [] => return None,
+        [one] => one.to_string(),
+        [rest @ .., last] => format!("{} and {last}", rest.join(", ")),
+    };
+    Some(format!("{}: read its {list}", path.display()))
 }
 
 /// The polygons of a file cut into triangles, with count of those that could not be cut
@@ -164,17 +184,6 @@ impl Polygons {
         }
         out
     }
-}
-
-/// The note for what a mesh file holds that is not used yet (`what`, e.g. "vertex
-/// normals"), or `None` when it holds nothing of the kind.
-pub(crate) fn unused_note(path: &Path, what: &[&str]) -> Option<String> {
-    let list = match what {
-        [] => return None,
-        [one] => one.to_string(),
-        [rest @ .., last] => format!("{} and {last}", rest.join(", ")),
-    };
-    Some(format!("{}: its {list} are not used yet", path.display()))
 }
 
 /// The whole file.

@@ -1,14 +1,17 @@
 //! Wavefront OBJ through `tobj`: polygons cut into triangles by ear clipping
 //! ([`crate::mesh::triangulate_polygon`]), every object and group merged into one triangle
-//! list in file order.
+//! list in file order. Vertex normals (`vn`), texture coordinates (`vt`) and vertex colours
+//! (`v x y z r g b`) are resolved here, not by tobj ([`Attributes`]): a vertex used with
+//! different normals or coordinates is split into one vertex per combination.
 
 use std::borrow::Cow;
+use std::collections::HashMap;
 use std::io::Cursor;
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
-use super::{MeshFile, Polygons, mtl, quoted, unused_note};
+use super::{MeshFile, Polygons, mtl, quoted};
 use crate::error::{Error, Result};
 use crate::material::Materials;
 use crate::mesh::{Mesh, coordinate_problem};
@@ -27,8 +30,8 @@ pub(super) fn parse(path: &Path, bytes: &[u8], read_materials: bool) -> Result<M
             "the file holds NUL bytes: binary data or UTF-16 text, not OBJ text",
         ));
     }
-    let mut unused = Unused::default();
-    let text = positions_only(bytes, &mut unused);
+    let attributes = Attributes::parse(bytes);
+    let text = positions_only(bytes);
     let bytes: &[u8] = &text;
     let options = tobj::LoadOptions {
         single_index: true,
@@ -53,6 +56,9 @@ pub(super) fn parse(path: &Path, bytes: &[u8], read_materials: bool) -> Result<M
     // Triangles of each model, for its material.
     let mut per_model = Vec::with_capacity(models.len());
     let mut corners = Vec::new();
+    // Per face in file order: its corners' vertex indices and its range of triangles.
+    let mut faces: Vec<(Vec<u32>, std::ops::Range<usize>)> = Vec::new();
+    let track = attributes.any();
     for model in &models {
         let m = &model.mesh;
         let offset = mesh.positions.len() as u32;
@@ -69,6 +75,11 @@ pub(super) fn parse(path: &Path, bytes: &[u8], read_materials: bool) -> Result<M
                     .chunks_exact(3)
                     .map(|t| [t[0] + offset, t[1] + offset, t[2] + offset]),
             );
+            if track {
+                for (i, t) in mesh.triangles[before..].iter().enumerate() {
+                    faces.push((t.to_vec(), before + i..before + i + 1));
+                }
+            }
         } else {
             let mut start = 0;
             for &arity in &m.face_arities {
@@ -79,13 +90,23 @@ pub(super) fn parse(path: &Path, bytes: &[u8], read_materials: bool) -> Result<M
                 }
                 corners.clear();
                 corners.extend(face.iter().map(|&i| i + offset));
+                let first = mesh.triangles.len();
                 polygons.cut(&mesh.positions, &corners, &mut mesh.triangles);
+                if track {
+                    faces.push((corners.clone(), first..mesh.triangles.len()));
+                }
             }
         }
         per_model.push(mesh.triangles.len() - before);
     }
     check_positions(path, bytes, &mesh)?;
     let mut warnings = Vec::new();
+    if track && let Err(why) = attributes.apply(&mut mesh, &faces) {
+        warnings.push(format!(
+            "{}: its normals, texture coordinates and colours are ignored: {why}",
+            path.display()
+        ));
+    }
     let materials = match read_materials {
         true => {
             let failures = failures.into_inner();
@@ -100,30 +121,154 @@ pub(super) fn parse(path: &Path, bytes: &[u8], read_materials: bool) -> Result<M
         mesh,
         materials,
         warnings,
-        notes: unused.note(path).into_iter().collect(),
+        notes: Vec::new(),
     })
 }
 
-/// What an OBJ file holds that cltrace reads past: `vn`, `vt` lines and vertex colours.
+/// A face corner's 0-based (vertex, texture coordinate, normal) indices, `None` where not
+/// given or bad.
+type Corner = (Option<usize>, Option<usize>, Option<usize>);
+
+/// What an OBJ file says besides positions and faces: its `vt`, `vn` and vertex colour
+/// lists, and for each face in file order each corner's references into them (resolved to
+/// 0-based indices; `None` where the corner gives none or a bad one).
 #[derive(Default)]
-struct Unused {
-    normals: bool,
-    texture_coordinates: bool,
-    colours: bool,
+struct Attributes {
+    uvs: Vec<Vec2>,
+    normals: Vec<Vec3>,
+    /// One per `v` line: its colour, if it has one.
+    colors: Vec<Option<Vec3>>,
+    /// Per face: per corner (vertex, texture coordinate, normal).
+    faces: Vec<Vec<Corner>>,
+    /// References to no `vt` or `vn` line: (1-based line, the reference).
+    bad: Option<(usize, String)>,
 }
 
-impl Unused {
-    fn note(&self, path: &Path) -> Option<String> {
-        let what: Vec<&str> = [
-            (self.normals, "vertex normals"),
-            (self.texture_coordinates, "texture coordinates"),
-            (self.colours, "vertex colours"),
-        ]
-        .into_iter()
-        .filter_map(|(has, what)| has.then_some(what))
-        .collect();
-        unused_note(path, &what)
+impl Attributes {
+    fn parse(bytes: &[u8]) -> Attributes {
+        let mut a = Attributes::default();
+        let text = String::from_utf8_lossy(bytes);
+        let number = |w: Option<&str>| w.and_then(|w| w.parse::<f32>().ok());
+        for (line, text) in text.lines().enumerate() {
+            let mut words = text.split_whitespace();
+            match words.next() {
+                Some("v") => {
+                    let w: Vec<f32> = words.filter_map(|w| w.parse().ok()).collect();
+                    a.colors
+                        .push((w.len() == 6).then(|| Vec3::new(w[3], w[4], w[5])));
+                }
+                Some("vt") => a.uvs.push(Vec2::new(
+                    number(words.next()).unwrap_or(0.0),
+                    number(words.next()).unwrap_or(0.0),
+                )),
+                Some("vn") => a.normals.push(Vec3::new(
+                    number(words.next()).unwrap_or(0.0),
+                    number(words.next()).unwrap_or(0.0),
+                    number(words.next()).unwrap_or(0.0),
+                )),
+                Some("f") => {
+                    let (v, t, n) = (a.colors.len(), a.uvs.len(), a.normals.len());
+                    let face = words
+                        .map(|w| {
+                            let mut parts = w.split('/');
+                            let mut next = |count: usize, bad: &mut Option<(usize, String)>| {
+                                let part = parts.next().filter(|p| !p.is_empty())?;
+                                let resolved = resolve(part, count);
+                                if resolved.is_none() && bad.is_none() {
+                                    *bad = Some((line + 1, quoted(w)));
+                                }
+                                resolved
+                            };
+                            let vertex = next(v, &mut None);
+                            let uv = next(t, &mut a.bad);
+                            let normal = next(n, &mut a.bad);
+                            (vertex, uv, normal)
+                        })
+                        .collect();
+                    a.faces.push(face);
+                }
+                _ => {}
+            }
+        }
+        a
     }
+
+    /// Whether the file has anything for [`Attributes::apply`] to do.
+    fn any(&self) -> bool {
+        !self.uvs.is_empty() || !self.normals.is_empty() || self.colors.iter().any(Option::is_some)
+    }
+
+    /// Gives `mesh` its vertex attributes: each triangle corner becomes the vertex of its
+    /// (position, texture coordinate, normal) combination, so a vertex shared by faces
+    /// with different normals (a crease) is split. `faces` are tobj's, in file order: each
+    /// face's corners (indices into `mesh.positions`) and the triangles cut from it. An
+    /// error says why nothing was read (and the mesh is left as it was).
+    fn apply(
+        &self,
+        mesh: &mut Mesh,
+        faces: &[(Vec<u32>, std::ops::Range<usize>)],
+    ) -> std::result::Result<(), String> {
+        if let Some((line, reference)) = &self.bad {
+            return Err(format!(
+                "line {line}: {reference} names a texture coordinate or normal that is not defined before it"
+            ));
+        }
+        let own: Vec<&Vec<_>> = self.faces.iter().filter(|f| !f.is_empty()).collect();
+        if own.len() != faces.len() {
+            return Err(format!(
+                "{} faces were read with them but {} without",
+                own.len(),
+                faces.len()
+            ));
+        }
+        let has_uv = !self.uvs.is_empty();
+        let has_normal = !self.normals.is_empty();
+        let has_color = self.colors.iter().any(Option::is_some);
+        let mut split: HashMap<(u32, Option<usize>, Option<usize>), u32> = HashMap::new();
+        let (mut positions, mut normals, mut uvs, mut colors) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut triangles = mesh.triangles.clone();
+        for ((corners, range), refs) in faces.iter().zip(own) {
+            if corners.len() != refs.len() {
+                return Err("a face has a different number of corners than tobj read".into());
+            }
+            for tri in &mut triangles[range.clone()] {
+                for corner in tri.iter_mut() {
+                    let slot = corners.iter().position(|c| c == corner).unwrap_or(0);
+                    let (vertex, uv, normal) = refs[slot];
+                    let key = (*corner, uv, normal);
+                    let next = positions.len() as u32;
+                    *corner = *split.entry(key).or_insert_with(|| {
+                        positions.push(mesh.positions[key.0 as usize]);
+                        if has_normal {
+                            normals.push(normal.map_or(Vec3::ZERO, |n| self.normals[n]));
+                        }
+                        if has_uv {
+                            uvs.push(uv.map_or(Vec2::ZERO, |t| self.uvs[t]));
+                        }
+                        if has_color {
+                            let c = vertex.and_then(|v| self.colors.get(v).copied().flatten());
+                            colors.push(c.map_or(Vec3::ONE, |c| c.clamp(Vec3::ZERO, Vec3::ONE)));
+                        }
+                        next
+                    });
+                }
+            }
+        }
+        mesh.positions = positions;
+        mesh.triangles = triangles;
+        (mesh.normals, mesh.uvs, mesh.colors) = (normals, uvs, colors);
+        Ok(())
+    }
+}
+
+/// A 1-based OBJ reference (negative: counting back from the last of `count`) as a 0-based
+/// index, if it names one of the `count` defined so far.
+fn resolve(reference: &str, count: usize) -> Option<usize> {
+    let i: i64 = reference.parse().ok()?;
+    let count = count as i64;
+    let index = if i > 0 { i - 1 } else { count + i };
+    (i != 0 && (0..count).contains(&index)).then_some(index as usize)
 }
 
 /// The error for an `f` line without vertices (tobj gives it no line), at its line.
@@ -143,11 +288,11 @@ fn empty_face(path: &Path, bytes: &[u8]) -> Error {
 /// `mtllib` without a name goes too: tobj fails on the first and cannot open the second. Line (`l`) and point (`p`) elements go too: tobj
 /// would make a triangle of `l 1 2 3`. Vertex colours are dropped too: tobj refuses a
 /// file where only some vertices have them. What is dropped is recorded in `unused`.
-fn positions_only<'a>(bytes: &'a [u8], unused: &mut Unused) -> Cow<'a, [u8]> {
+fn positions_only(bytes: &[u8]) -> Cow<'_, [u8]> {
     let mut out: Option<Vec<u8>> = None;
     let mut done = 0;
     for line in bytes.split_inclusive(|&b| b == b'\n') {
-        match (rewrite_line(line, unused), &mut out) {
+        match (rewrite_line(line), &mut out) {
             (None, Some(out)) => out.extend_from_slice(line),
             (None, None) => {}
             (Some(new), out) => out
@@ -170,7 +315,7 @@ fn positions_only<'a>(bytes: &'a [u8], unused: &mut Unused) -> Cow<'a, [u8]> {
 /// split as tobj splits them, at any Unicode whitespace (a vertical tab or a no-break space
 /// too): a `vt` reference that tobj sees but this missed would reach tobj's overflowing
 /// arithmetic. A line that is not UTF-8 is kept, for tobj to refuse.
-fn rewrite_line(line: &[u8], unused: &mut Unused) -> Option<Vec<u8>> {
+fn rewrite_line(line: &[u8]) -> Option<Vec<u8>> {
     let text = std::str::from_utf8(line).ok()?;
     let mut words = text.split_whitespace();
     let keyword = words.next()?;
@@ -184,14 +329,7 @@ fn rewrite_line(line: &[u8], unused: &mut Unused) -> Option<Vec<u8>> {
         Some(new.into_bytes())
     };
     match keyword {
-        "vt" => {
-            unused.texture_coordinates = true;
-            Some(b"\n".to_vec())
-        }
-        "vn" => {
-            unused.normals = true;
-            Some(b"\n".to_vec())
-        }
+        "vt" | "vn" => Some(b"\n".to_vec()),
         // Lines and points are not surfaces, but tobj makes a triangle of `l 1 2 3`.
         "l" | "p" => Some(b"\n".to_vec()),
         // tobj takes the name after the first space, so a tab or leading blank would lose
@@ -212,10 +350,7 @@ fn rewrite_line(line: &[u8], unused: &mut Unused) -> Option<Vec<u8>> {
             }
         })),
         // `v x y z r g b`: keep `v x y z`
-        "v" if words.clone().count() == 6 => {
-            unused.colours = true;
-            rebuilt(&mut words.take(3))
-        }
+        "v" if words.clone().count() == 6 => rebuilt(&mut words.take(3)),
         _ => None,
     }
 }

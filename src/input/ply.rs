@@ -1,49 +1,20 @@
 //! Stanford PLY (ASCII, binary little- and big-endian) through `ply-rs-bw`: the `vertex`
-//! element's x, y, z and the `face` element's index list, faces of any size cut into
-//! triangles by ear clipping ([`crate::mesh::triangulate_polygon`]).
+//! element's x, y, z, its normals (`nx ny nz`), texture coordinates (`s t`, `u v`,
+//! `texture_u texture_v`, `texture_s texture_t`) and colours (`red green blue`, bytes or
+//! floats in [0, 1], sRGB), and the `face` element's index list, faces of any size cut
+//! into triangles by ear clipping ([`crate::mesh::triangulate_polygon`]).
 
 use std::io::{BufReader, Cursor};
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use ply_rs_bw::parser::{ParseError, Parser, Reader};
 use ply_rs_bw::ply::{Encoding, Property, PropertyAccess, PropertyAccessResult};
 
-use super::{MeshFile, Polygons, unused_note};
+use super::{MeshFile, Polygons};
 use crate::error::{Error, Result};
 use crate::material::Materials;
 use crate::mesh::Mesh;
-
-/// Vertex properties cltrace reads past, by what they are: normals, texture coordinates
-/// (under the names PLY writers use) and colours.
-const UNUSED: [(&str, &[&str]); 3] = [
-    ("vertex normals", &["nx", "ny", "nz"]),
-    (
-        "texture coordinates",
-        &[
-            "s",
-            "t",
-            "u",
-            "v",
-            "texture_u",
-            "texture_v",
-            "texture_s",
-            "texture_t",
-        ],
-    ),
-    (
-        "vertex colours",
-        &[
-            "red",
-            "green",
-            "blue",
-            "alpha",
-            "diffuse_red",
-            "diffuse_green",
-            "diffuse_blue",
-        ],
-    ),
-];
 
 /// Parses a PLY file's bytes; `path` names it in messages. Its triangles are grey.
 pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<MeshFile> {
@@ -64,7 +35,6 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<MeshFile> {
 
     let mut vertices = Vec::new();
     let mut faces = Vec::new();
-    let mut unused = Vec::new();
     for element in header.elements.values() {
         match element.name.as_str() {
             "vertex" => {
@@ -76,11 +46,6 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<MeshFile> {
                         ));
                     }
                 }
-                unused = UNUSED
-                    .iter()
-                    .filter(|(_, names)| names.iter().any(|n| element.properties.contains_key(*n)))
-                    .map(|(what, _)| *what)
-                    .collect();
                 vertices = Parser::<Vertex>::new()
                     .read_payload_for_element(&mut reader, element, &header)
                     .map_err(fail)?;
@@ -110,7 +75,29 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<MeshFile> {
         }
     }
 
-    let positions: Vec<Vec3> = vertices.iter().map(|v| v.0).collect();
+    let positions: Vec<Vec3> = vertices.iter().map(|v| v.position).collect();
+    // An attribute counts only if every vertex has all of its parts.
+    let all = |bit: u8| !vertices.is_empty() && vertices.iter().all(|v| v.has & bit == bit);
+    let mut mesh = Mesh::new(Vec::new(), Vec::new());
+    if all(HAS_NORMAL) {
+        mesh.normals = vertices.iter().map(|v| v.normal).collect();
+    }
+    if all(HAS_UV) {
+        mesh.uvs = vertices.iter().map(|v| v.uv).collect();
+    }
+    if all(HAS_COLOR) {
+        let byte = vertices.iter().any(|v| v.byte_color);
+        mesh.colors = vertices
+            .iter()
+            .map(|v| {
+                let c = if byte { v.color / 255.0 } else { v.color };
+                c.clamp(Vec3::ZERO, Vec3::ONE)
+                    .to_array()
+                    .map(super::texture::srgb_to_linear)
+                    .into()
+            })
+            .collect();
+    }
     let mut triangles = Vec::with_capacity(faces.len());
     let mut polygons = Polygons::default();
     let mut corners = Vec::new();
@@ -129,11 +116,13 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<MeshFile> {
         corners.extend(idx.iter().map(|&v| v as u32));
         polygons.cut(&positions, &corners, &mut triangles);
     }
+    mesh.positions = positions;
+    mesh.triangles = triangles;
     Ok(MeshFile {
-        mesh: Mesh::new(positions, triangles),
+        mesh,
         materials: Materials::default(),
         warnings: polygons.warnings(path),
-        notes: unused_note(path, &unused).into_iter().collect(),
+        notes: Vec::new(),
     })
 }
 
@@ -225,27 +214,65 @@ fn as_indices(p: Property) -> Option<Vec<i64>> {
     })
 }
 
-struct Vertex(Vec3);
+/// Which of a vertex's attribute parts were set, as bits of [`Vertex::has`]: a normal
+/// needs all of nx, ny, nz (bits 0-2), a texture coordinate both parts (3-4), a colour all
+/// three channels (5-7).
+const HAS_NORMAL: u8 = 0b111;
+const HAS_UV: u8 = 0b11 << 3;
+const HAS_COLOR: u8 = 0b111 << 5;
+
+#[derive(Default)]
+struct Vertex {
+    position: Vec3,
+    normal: Vec3,
+    uv: Vec2,
+    color: Vec3,
+    has: u8,
+    /// Colours given as integers (0 to 255) rather than floats in [0, 1].
+    byte_color: bool,
+}
 
 impl PropertyAccess for Vertex {
     fn new() -> Self {
-        Vertex(Vec3::ZERO)
+        Vertex::default()
     }
 
     fn set_property(&mut self, name: &str, property: Property) -> PropertyAccessResult {
-        let axis = match name {
-            "x" => 0,
-            "y" => 1,
-            "z" => 2,
-            _ => return PropertyAccessResult::Ignored,
+        let Some(v) = as_f64(&property) else {
+            return match name {
+                "x" | "y" | "z" => PropertyAccessResult::UnsupportedType,
+                _ => PropertyAccessResult::Ignored,
+            };
         };
-        match as_f64(&property) {
-            Some(v) => {
-                self.0[axis] = v as f32;
-                PropertyAccessResult::Set
+        let v32 = v as f32;
+        match name {
+            "x" => self.position.x = v32,
+            "y" => self.position.y = v32,
+            "z" => self.position.z = v32,
+            "nx" => self.set(|s| s.normal.x = v32, 1),
+            "ny" => self.set(|s| s.normal.y = v32, 1 << 1),
+            "nz" => self.set(|s| s.normal.z = v32, 1 << 2),
+            "s" | "u" | "texture_u" | "texture_s" => self.set(|s| s.uv.x = v32, 1 << 3),
+            "t" | "v" | "texture_v" | "texture_t" => self.set(|s| s.uv.y = v32, 1 << 4),
+            "red" | "diffuse_red" | "green" | "diffuse_green" | "blue" | "diffuse_blue" => {
+                let channel = match name.trim_start_matches("diffuse_") {
+                    "red" => 0,
+                    "green" => 1,
+                    _ => 2,
+                };
+                self.byte_color |= !matches!(property, Property::Float(_) | Property::Double(_));
+                self.set(|s| s.color[channel] = v32, 1 << (5 + channel))
             }
-            None => PropertyAccessResult::UnsupportedType,
+            _ => return PropertyAccessResult::Ignored,
         }
+        PropertyAccessResult::Set
+    }
+}
+
+impl Vertex {
+    fn set(&mut self, write: impl FnOnce(&mut Self), bit: u8) {
+        write(self);
+        self.has |= bit;
     }
 }
 
