@@ -5,8 +5,8 @@
 #error "bin32.cl is one layout's traversal: its program is built with -D LAYOUT_BIN32 (src/device/program.rs)"
 #endif
 
-#define SCENE_PARAMS __global const Bin32Node* nodes, __global const Triangle* tris, __global uint* status
-#define SCENE nodes, tris, status
+#define SCENE_PARAMS __global const Bin32Node* nodes, __global const Triangle* tris, __global uint* status, SURFACE_PARAMS
+#define SCENE nodes, tris, status, SURFACE
 
 /* Entry distance into `node`'s box if the ray meets it before t_max, else -1. */
 FORCE_INLINE float hit_box(const __global Bin32Node* node, float3 org, float3 inv, float t_max) {

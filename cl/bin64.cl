@@ -5,8 +5,8 @@
 #error "bin64.cl is one layout's traversal: its program is built with -D LAYOUT_BIN64 (src/device/program.rs)"
 #endif
 
-#define SCENE_PARAMS __global const Bin64Node* nodes, __global const Triangle* tris, __global uint* status
-#define SCENE nodes, tris, status
+#define SCENE_PARAMS __global const Bin64Node* nodes, __global const Triangle* tris, __global uint* status, SURFACE_PARAMS
+#define SCENE nodes, tris, status, SURFACE
 
 /* TEST_LEAF for count >= 1 with the next triangle's rows loading while one is tested, so
  * that a leaf costs one memory latency instead of one per triangle. Measured on the H100,

@@ -18,11 +18,11 @@
 
 /* A triangle as the intersector reads it: three corners, each padded to 16 bytes so that a
  * corner is one vector load. `prim` is the triangle's index in file order, `material` its
- * index into the Material array. */
+ * index into the Material array, `flags` TRIANGLE_MASKED for a cut-out material. */
 typedef struct {
     float v0[3]; uint prim;
     float v1[3]; uint material;
-    float v2[3]; uint pad;
+    float v2[3]; uint flags;
 } Triangle;
 
 /* A material (src/material/mod.rs): base colour and emission with their textures, the

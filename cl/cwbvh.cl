@@ -7,8 +7,8 @@
 #error "cwbvh.cl is one layout's traversal: its program is built with -D LAYOUT_CWBVH (src/device/program.rs)"
 #endif
 
-#define SCENE_PARAMS __global const CwbvhNode* nodes, __global const Triangle* tris, __global uint* status
-#define SCENE nodes, tris, status
+#define SCENE_PARAMS __global const CwbvhNode* nodes, __global const Triangle* tris, __global uint* status, SURFACE_PARAMS
+#define SCENE nodes, tris, status, SURFACE
 
 /* Byte k of the 8 bytes (lo, hi), as a float. */
 FORCE_INLINE float byte_of(uint lo, uint hi, uint k) {

@@ -29,9 +29,9 @@ FORCE_INLINE float3 sky(float3 d) {
                       : mix((float3)(1.0f), (float3)(0.35f), -up);
 }
 
-/* What the shade modes read besides the geometry: materials, and the emitting triangles
+/* What the shade modes read besides the scene and its surfaces: the emitting triangles
  * (indices into tris) with the cumulative distribution of their areas. */
-#define LIGHT_PARAMS __global const Material* materials, __global const uint* emitters, \
+#define LIGHT_PARAMS __global const uint* emitters, \
     __global const float* emitter_cdf, uint emitter_count, float emitter_area
 
 /* Every sample kernel takes the same arguments; each mode reads the ones it needs. The
@@ -77,17 +77,21 @@ FORCE_INLINE bool occluded(SCENE_PARAMS, float3 org, float3 dir, float t_max) {
     return trace(SCENE, org, dir, t_max, true, true, &t) != MISS;
 }
 
+/* The width of a camera ray's cone at ray parameter t (of the unnormalised pixel ray):
+ * one pixel's footprint there. */
+FORCE_INLINE float camera_cone(float4 du, float t) { return t * length3(du.xyz); }
+
 __kernel void sample_ao(SAMPLE_PARAMS) {
     SAMPLE_CAMERA_HIT
     float3 radiance = (float3)(0.0f);
     uint count = 1;
     if (hit != MISS) {
-        float3 n = facing_normal(&tris[hit], dir);
-        float3 origin = eye.xyz + dir * t + n * offset;
+        SurfacePoint sp = surface_point(SURFACE, &tris[hit], eye.xyz, dir, t, offset, camera_cone(du, t));
         uint open = 0;
         for (uint k = 0; k < ao_samples; ++k) {
-            float3 d = cosine_direction(n, sample_1d(key, bounce_dim(0) + 2 * k), sample_1d(key, bounce_dim(0) + 2 * k + 1));
-            open += !occluded(SCENE, origin, d, ao_distance);
+            float3 d = cosine_direction(sp.ns, sample_1d(key, bounce_dim(0) + 2 * k), sample_1d(key, bounce_dim(0) + 2 * k + 1));
+            /* Below the geometric surface a shading-normal direction is blocked. */
+            open += dot3(d, sp.ng) > 0.0f && !occluded(SCENE, sp.origin, d, ao_distance);
         }
         count += ao_samples;
         radiance = (float3)((float)open / (float)max(ao_samples, 1u));
@@ -100,19 +104,18 @@ __kernel void sample_shadow(SAMPLE_PARAMS) {
     float3 radiance = (float3)(0.0f);
     uint count = 1;
     if (hit != MISS) {
-        const __global Material* m = &materials[tris[hit].material];
-        float3 n = facing_normal(&tris[hit], dir);
-        float3 origin = eye.xyz + dir * t + n * offset;
+        SurfacePoint sp = surface_point(SURFACE, &tris[hit], eye.xyz, dir, t, offset, camera_cone(du, t));
+        float3 origin = sp.origin;
         /* light.w: 0 for a direction towards the light, 1 for the light's position. */
         float3 l = light.w == 0.0f ? normalize(light.xyz) : normalize(light.xyz - origin);
         float reach = light.w == 0.0f ? INFINITY : length(light.xyz - origin);
-        float c = dot(n, l);
+        float c = dot(sp.ns, l);
         float direct = 0.0f;
-        if (c > 0.0f) {
+        if (c > 0.0f && dot3(l, sp.ng) > 0.0f) {
             count += 1;
             if (!occluded(SCENE, origin, l, reach)) direct = c;
         }
-        radiance = load3(m->albedo) * (SHADOW_AMBIENT + (1.0f - SHADOW_AMBIENT) * direct) + load3(m->emission);
+        radiance = sp.albedo * (SHADOW_AMBIENT + (1.0f - SHADOW_AMBIENT) * direct) + sp.emission;
     }
     add_sample(accum, rays, accum_pitch, x - col0, y - row0, radiance, count);
 }
@@ -127,6 +130,18 @@ FORCE_INLINE uint pick_emitter(__global const float* cdf, uint count, float u) {
     return lo;
 }
 
+/* The radiance an emitter e sends from its point with barycentrics (w0, w1, 1 - w0 - w1):
+ * its material's emission, times its emission texture there (full resolution). */
+FORCE_INLINE float3 emitted(SURFACE_PARAMS, const __global Triangle* e, float w0, float w1) {
+    const __global Material* m = &materials[e->material];
+    float3 le = load3(m->emission);
+    if (m->emission_texture != NO_TEXTURE && (surface_flags & SURFACE_UVS) != 0u) {
+        float2 uv = surface_uv(SURFACE, e->prim, (float3)(w0, w1, 1.0f - w0 - w1));
+        le = le * sample_texture(textures, texels, m->emission_texture, uv, 0.0f).xyz;
+    }
+    return le;
+}
+
 __kernel void sample_path(SAMPLE_PARAMS) {
     SAMPLE_PIXEL
     float3 org = eye.xyz;
@@ -135,31 +150,36 @@ __kernel void sample_path(SAMPLE_PARAMS) {
     uint count = 1;
     float t;
     uint hit = trace(SCENE, org, dir, INFINITY, false, false, &t);
+    /* The ray cone's width at the last hit (0 at the eye), for texture filtering. */
+    float cone = 0.0f;
     for (uint bounce = 0;; ++bounce) {
         if (hit == MISS) {
             if (emitter_count == 0) radiance += throughput * sky(dir);
             break;
         }
         const __global Triangle* tri = &tris[hit];
-        const __global Material* m = &materials[tri->material];
-        float3 n = facing_normal(tri, dir);
+        cone = bounce == 0 ? camera_cone(du, t) : cone + BOUNCE_CONE_SPREAD * t;
+        SurfacePoint sp = surface_point(SURFACE, tri, org, dir, t, offset, cone);
         /* Later bounces reach emitters through next-event estimation instead. */
-        if (bounce == 0) radiance += throughput * load3(m->emission);
-        float3 origin = org + dir * t + n * offset;
-        float3 albedo = load3(m->albedo);
+        if (bounce == 0) radiance += throughput * sp.emission;
+        float3 origin = sp.origin;
+        float3 albedo = sp.albedo;
+        float3 n = sp.ns;
         uint d = bounce_dim(bounce);
         if (emitter_count > 0) {
             const __global Triangle* e = &tris[emitters[pick_emitter(emitter_cdf, emitter_count, sample_1d(key, d))]];
-            float3 q = triangle_point(load3(e->v0), load3(e->v1), load3(e->v2), sample_1d(key, d + 1), sample_1d(key, d + 2));
+            float u1 = sample_1d(key, d + 1), u2 = sample_1d(key, d + 2);
+            float3 q = triangle_point(load3(e->v0), load3(e->v1), load3(e->v2), u1, u2);
             float3 w = q - origin;
             float d2 = dot(w, w);
             float3 l = w / sqrt(d2);
             float cos_here = dot(n, l);
             float cos_there = dot(facing_normal(e, l), -l);
-            if (cos_here > 0.0f && cos_there > 0.0f) {
+            if (cos_here > 0.0f && cos_there > 0.0f && dot3(l, sp.ng) > 0.0f) {
                 count += 1;
                 if (!occluded(SCENE, origin, l, sqrt(d2) * (1.0f - 1e-4f))) {
-                    radiance += throughput * albedo / M_PI_F * load3(materials[e->material].emission)
+                    float su = sqrt(u1);
+                    radiance += throughput * albedo / M_PI_F * emitted(SURFACE, e, 1.0f - su, u2 * su)
                                 * (cos_here * cos_there / d2 * emitter_area);
                 }
             }
@@ -173,6 +193,8 @@ __kernel void sample_path(SAMPLE_PARAMS) {
         }
         org = origin;
         dir = cosine_direction(n, sample_1d(key, d + 4), sample_1d(key, d + 5));
+        /* A direction below the geometric surface would leave through it. */
+        if (dot3(dir, sp.ng) <= 0.0f) break;
         count += 1;
         hit = trace(SCENE, org, dir, INFINITY, false, true, &t);
     }

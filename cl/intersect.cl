@@ -50,6 +50,23 @@ FORCE_INLINE float intersect_triangle(const WatertightRay* r, float3 v0, float3 
     return t / det;
 }
 
+/* The barycentric weights (of v0, v1, v2) of the ray's hit with tri, a triangle it hits:
+ * the watertight test's edge functions over their sum. Mirrored by
+ * WatertightRay::barycentrics in src/intersect.rs. */
+FORCE_INLINE float3 hit_barycentrics(const WatertightRay* r, const __global Triangle* tri) {
+    const __global float4* row = (const __global float4*)tri;
+    float3 a = row[0].xyz - r->org, b = row[1].xyz - r->org, c = row[2].xyz - r->org;
+    float a_z = pick(a, r->kz), b_z = pick(b, r->kz), c_z = pick(c, r->kz);
+    float ax = pick(a, r->kx) - r->sx * a_z, ay = pick(a, r->ky) - r->sy * a_z;
+    float bx = pick(b, r->kx) - r->sx * b_z, by = pick(b, r->ky) - r->sy * b_z;
+    float cx = pick(c, r->kx) - r->sx * c_z, cy = pick(c, r->ky) - r->sy * c_z;
+    float u = cx * by - cy * bx;
+    float v = ax * cy - ay * cx;
+    float w = bx * ay - by * ax;
+    float det = u + v + w;
+    return det == 0.0f ? (float3)(1.0f, 0.0f, 0.0f) : (float3)(u / det, v / det, w / det);
+}
+
 /* 1 / dir per component: a zero component gives an infinite inverse. Where the origin lies
  * in that slab's plane, 0 * inf makes the slab's distances NaN, which fmin and fmax skip, so
  * a ray lying in a box face's plane counts as inside the slab (RayBox in src/intersect.rs). */

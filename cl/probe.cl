@@ -1,6 +1,7 @@
 /* probe.cl: reports how this device's compiler lays out the shared structs and sees the
  * constants the host writes in front of every program, so that tests/layout.rs can compare
- * them with the Rust side. Its program is common.cl, nodes.cl (every struct) and this. */
+ * them with the Rust side. Its program is common.cl, texture.cl, nodes.cl (every struct) and
+ * this. */
 
 #define OFFSET(type, field) ((uint)((const char*)&probe_##type.field - (const char*)&probe_##type))
 
@@ -9,6 +10,7 @@ __kernel void probe_layout(__global uint* out) {
     Bin32Node probe_Bin32Node;
     Hit probe_Hit;
     Material probe_Material;
+    TextureInfo probe_TextureInfo;
     Bin64Node probe_Bin64Node;
     Wide4Node probe_Wide4Node;
     Wide8Node probe_Wide8Node;
@@ -39,6 +41,9 @@ __kernel void probe_layout(__global uint* out) {
     out[i++] = OFFSET(Material, alpha_texture);
     out[i++] = OFFSET(Material, alpha_cutoff);
     out[i++] = OFFSET(Material, occlusion_texture);
+    out[i++] = sizeof(TextureInfo);
+    out[i++] = OFFSET(TextureInfo, levels);
+    out[i++] = OFFSET(TextureInfo, wrap_v);
     out[i++] = sizeof(Bin64Node);
     out[i++] = OFFSET(Bin64Node, right_xy);
     out[i++] = OFFSET(Bin64Node, z);
@@ -80,4 +85,12 @@ __kernel void probe_constants(__global uint* out) {
     out[i++] = as_uint(MAX_SAMPLE_RADIANCE);
     out[i++] = as_uint(ROBUST_EXIT);
     out[i++] = (uint)NO_TEXTURE;
+    out[i++] = WRAP_REPEAT;
+    out[i++] = WRAP_CLAMP;
+    out[i++] = WRAP_MIRROR;
+    out[i++] = SURFACE_NORMALS;
+    out[i++] = SURFACE_UVS;
+    out[i++] = SURFACE_COLORS;
+    out[i++] = TRIANGLE_MASKED;
+    out[i++] = as_uint(BOUNCE_CONE_SPREAD);
 }

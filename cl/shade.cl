@@ -1,6 +1,7 @@
 /* shade.cl: the colour of a primary hit in the single-hit shade modes (normal, depth,
- * lambert: SHADE_* from the host's Shade::code, src/render/mod.rs) and the writing of a
- * pixel's hit and colour; mirrored by src/render/shade.rs. */
+ * lambert: SHADE_* from the host's Shade::code, src/render/mod.rs), from the shading
+ * normal (cl/surface.cl), and the writing of a pixel's hit and colour; mirrored by
+ * src/render/shade.rs. */
 
 /* A colour channel in [0, 1] as a byte, rounded. */
 FORCE_INLINE uint quantize(float v) { return (uint)(clamp(v, 0.0f, 1.0f) * 255.0f + 0.5f); }
@@ -10,13 +11,8 @@ FORCE_INLINE uint pack_rgba(float r, float g, float b) {
     return quantize(r) | (quantize(g) << 8) | (quantize(b) << 16) | (255u << 24);
 }
 
-/* The colour of a hit on `tri` at `distance` along `dir`: ShadeParams::color. */
-FORCE_INLINE uint shade_hit(int mode, float near, float far, const __global Triangle* tri, float distance, float3 dir) {
-    float3 v0 = load3(tri->v0);
-    float3 e1 = load3(tri->v1) - v0, e2 = load3(tri->v2) - v0;
-    float3 n = (float3)(e1.y * e2.z - e1.z * e2.y, e1.z * e2.x - e1.x * e2.z, e1.x * e2.y - e1.y * e2.x);
-    float n_len = sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
-    n = n / n_len;
+/* The colour of a hit with unit normal n at `distance` along `dir`: ShadeParams::color. */
+FORCE_INLINE uint shade_hit(int mode, float near, float far, float3 n, float distance, float3 dir) {
     if (mode == SHADE_NORMAL) {
         return pack_rgba(0.5f * n.x + 0.5f, 0.5f * n.y + 0.5f, 0.5f * n.z + 0.5f);
     }
@@ -33,7 +29,7 @@ FORCE_INLINE uint shade_hit(int mode, float near, float far, const __global Tria
  * the band being traced. Pitches count elements, not bytes. */
 FORCE_INLINE void store_pixel(__global Hit* hits, uint hit_pitch, __global uint* colors, uint color_pitch,
                         uint x, uint row, uint best, float t, float3 dir, const __global Triangle* tris,
-                        int shade, float near, float far) {
+                        float3 n, int shade, float near, float far) {
     Hit h;
     uint color = 0xFF000000u;
     if (best == MISS) {
@@ -43,7 +39,7 @@ FORCE_INLINE void store_pixel(__global Hit* hits, uint hit_pitch, __global uint*
         float distance = t * length3(dir);
         h.prim = tris[best].prim;
         h.t = distance;
-        color = shade_hit(shade, near, far, &tris[best], distance, dir);
+        color = shade_hit(shade, near, far, n, distance, dir);
     }
     hits[row * hit_pitch + x] = h;
     colors[row * color_pitch + x] = color;

@@ -15,7 +15,11 @@ __kernel void trace_primary(SCENE_PARAMS, CAMERA_BAND_PARAMS,
     float3 dir = camera_ray(p0, du, dv, x, y);
     float t;
     uint best = trace(SCENE, eye.xyz, dir, INFINITY, false, false, &t);
-    store_pixel(hits, hit_pitch, colors, color_pitch, x, y - row0, best, t, dir, tris, shade, near, far);
+    float3 n = (float3)(0.0f);
+    if (best != MISS && shade != SHADE_DEPTH) {
+        n = surface_point(SURFACE, &tris[best], eye.xyz, dir, t, 0.0f, 0.0f).normal;
+    }
+    store_pixel(hits, hit_pitch, colors, color_pitch, x, y - row0, best, t, dir, tris, n, shade, near, far);
 }
 
 /* Arbitrary rays: origin and t_max in rays[2i] (xyz, w), direction in rays[2i + 1]. With

@@ -35,8 +35,16 @@
 
 /* Keeps a triangle test's result h (negative: no hit) for triangle `index` as the closest
  * hit so far (t, best); with any_hit, the first hit ends the traversal. */
+#ifdef ALPHA_MASKS
+/* Programs for scenes with cut-out materials (ALPHA_MASKS defined) look a hit's mask up
+ * before keeping it (mask_keeps, cl/surface.cl); others never pay for it. */
+#define HIT_COUNTS(h, index) ((h) >= 0.0f && mask_keeps(SURFACE, &ray, &tris[index]))
+#else
+#define HIT_COUNTS(h, index) ((h) >= 0.0f)
+#endif
+
 #define KEEP_HIT(h, index)                                               \
-    if ((h) >= 0.0f) {                                                   \
+    if (HIT_COUNTS(h, index)) {                                          \
         t = (h);                                                         \
         best = (index);                                                  \
         if (any_hit) { *t_hit = t; return best; }                        \

@@ -14,8 +14,8 @@
 /* WIDE_F has one lane per slot (a declaration only: no code). */
 typedef char wide_lanes_are_slots[vec_step(WIDE_F) == WIDE_WIDTH ? 1 : -1];
 
-#define SCENE_PARAMS __global const WIDE_NODE* nodes, __global const Triangle* tris, __global uint* status
-#define SCENE nodes, tris, status
+#define SCENE_PARAMS __global const WIDE_NODE* nodes, __global const Triangle* tris, __global uint* status, SURFACE_PARAMS
+#define SCENE nodes, tris, status, SURFACE
 
 /* Pops the next stacked node still nearer than the closest hit into `node`, or leaves the
  * traversal loop when none is left. */

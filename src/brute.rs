@@ -17,12 +17,18 @@ impl ClosestHit for BruteForce {
         &self.triangles
     }
 
-    fn trace(&self, ray: &Ray, t_max: f32, any_hit: bool) -> Option<(usize, f32)> {
+    fn trace_filtered(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        any_hit: bool,
+        keeps: &dyn Fn(usize, &WatertightRay) -> bool,
+    ) -> Option<(usize, f32)> {
         let wray = WatertightRay::new(ray);
         let mut best = None;
         let mut t = t_max;
         for (i, tri) in self.triangles.iter().enumerate() {
-            if let Some(h) = wray.intersect_stored(tri, t) {
+            if let Some(h) = wray.intersect_stored(tri, t).filter(|_| keeps(i, &wray)) {
                 t = h;
                 best = Some((i, h));
                 if any_hit {

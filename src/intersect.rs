@@ -31,8 +31,8 @@ pub struct Triangle {
     pub material: u32,
     /// Third corner; equal to `v0` for a zero-area triangle.
     pub v2: [f32; 3],
-    /// Padding of the third row to 16 bytes; always 0, read by no kernel.
-    pub pad: u32,
+    /// [`TRIANGLE_MASKED`] for a triangle whose material has a cut-out mask, else 0.
+    pub flags: u32,
 }
 
 impl Triangle {
@@ -52,10 +52,14 @@ impl Triangle {
             v1: b.to_array(),
             material: 0,
             v2: c.to_array(),
-            pad: 0,
+            flags: 0,
         }
     }
 }
+
+/// [`Triangle::flags`] bit: the material has a cut-out mask, so a hit counts only where
+/// the mask lets it (`mask_keeps` in cl/surface.cl).
+pub const TRIANGLE_MASKED: u32 = 1;
 
 /// The mesh's triangles in the order given (file order for brute force, leaf order for a
 /// BVH), each carrying its file-order index.
@@ -74,7 +78,20 @@ pub trait ClosestHit: Sync {
 
     /// The closest hit along `ray` with `t` in `(0, t_max)` or, with `any_hit`, the first
     /// hit found there: the index into [`ClosestHit::triangles`] and the ray parameter.
-    fn trace(&self, ray: &Ray, t_max: f32, any_hit: bool) -> Option<(usize, f32)>;
+    fn trace(&self, ray: &Ray, t_max: f32, any_hit: bool) -> Option<(usize, f32)> {
+        self.trace_filtered(ray, t_max, any_hit, &|_, _| true)
+    }
+
+    /// [`ClosestHit::trace`] counting only the hits `keeps` accepts (given the triangle's
+    /// index and the ray's test constants): the cut-out masks, which the kernels test at
+    /// the same point of the traversal (`HIT_COUNTS` in cl/traverse.cl).
+    fn trace_filtered(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        any_hit: bool,
+        keeps: &dyn Fn(usize, &WatertightRay) -> bool,
+    ) -> Option<(usize, f32)>;
 
     /// The closest hit along `ray` in `(0, t_max)`.
     fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<(usize, f32)> {
@@ -169,6 +186,31 @@ impl WatertightRay {
             t < 0.0 && t > t_max * det
         };
         inside.then(|| t / det)
+    }
+
+    /// The barycentric weights (of `v0`, `v1`, `v2`) of this ray's hit with `tri`:
+    /// `hit_barycentrics` in cl/intersect.cl.
+    pub fn barycentrics(&self, tri: &Triangle) -> [f32; 3] {
+        let o = self.org;
+        let sub = |v: [f32; 3]| [v[0] - o[0], v[1] - o[1], v[2] - o[2]];
+        let (a, b, c) = (sub(tri.v0), sub(tri.v1), sub(tri.v2));
+        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
+        let (a_z, b_z, c_z) = (a[kz], b[kz], c[kz]);
+        let ax = a[kx] - self.sx * a_z;
+        let ay = a[ky] - self.sy * a_z;
+        let bx = b[kx] - self.sx * b_z;
+        let by = b[ky] - self.sy * b_z;
+        let cx = c[kx] - self.sx * c_z;
+        let cy = c[ky] - self.sy * c_z;
+        let u = cx * by - cy * bx;
+        let v = ax * cy - ay * cx;
+        let w = bx * ay - by * ax;
+        let det = u + v + w;
+        if det == 0.0 {
+            [1.0, 0.0, 0.0]
+        } else {
+            [u / det, v / det, w / det]
+        }
     }
 
     /// `WatertightRay::intersect` on a stored triangle.

@@ -16,8 +16,9 @@ use crate::device::{ClDevice, ClTracer, default_layout};
 use crate::error::Result;
 use crate::geometry::Ray;
 use crate::intersect::{ClosestHit, Triangle, triangles_in_order};
-use crate::material::{Material, Materials};
-use crate::mesh::Mesh;
+use crate::material::Materials;
+use crate::material::surface::Surface;
+use crate::mesh::{DEFAULT_CREASE_ANGLE, Mesh};
 use crate::render::integrator::{self, Accumulation, Emitters, SampleSettings};
 use crate::render::{Frame, Hit, Method, ShadeParams, cpu};
 use crate::report::{Progress, Timings};
@@ -25,8 +26,8 @@ use crate::report::{Progress, Timings};
 /// A method made ready for one mesh (on one device, for the OpenCL methods).
 pub struct Renderer<'d> {
     tracer: Tracer<'d>,
-    /// The materials, indexed by the triangles' `material`.
-    materials: Vec<Material>,
+    /// The materials, vertex data and textures the shading reads.
+    surface: Surface,
     /// The emitting triangles, as indices into the tracer's triangle order.
     emitters: Emitters,
     /// The BVH's statistics, for the BVH methods.
@@ -55,6 +56,9 @@ pub struct PrepareOptions {
     pub work_group: Option<[usize; 2]>,
     /// Also compile the progressive shade modes (OpenCL methods).
     pub sampling: bool,
+    /// The crease angle of smooth normals, in degrees, for triangle corners without a
+    /// normal (0: faceted); `None` takes [`DEFAULT_CREASE_ANGLE`].
+    pub crease_angle: Option<f32>,
 }
 
 /// What tracing cost.
@@ -146,6 +150,20 @@ impl<'d> Renderer<'d> {
         timings: &mut Timings,
     ) -> Result<Self> {
         let sampling = options.sampling;
+        let surface = timings.time("surface", || {
+            let crease = options.crease_angle.unwrap_or(DEFAULT_CREASE_ANGLE);
+            let mut smooth;
+            let mesh = match crease > 0.0 {
+                true => {
+                    smooth = mesh.clone();
+                    smooth.fill_normals(crease);
+                    &smooth
+                }
+                false => mesh,
+            };
+            Surface::new(mesh, materials)
+        });
+        let masks = surface.has_masks();
         let (flat, mut bvh) = match built {
             Some((flat, stats)) => (Some(flat), Some(stats)),
             None => (None, None),
@@ -179,14 +197,16 @@ impl<'d> Renderer<'d> {
             }
             (Method::ClBrute, _) => {
                 let device = device();
-                let program =
-                    timings.time("compile", || ClTracer::compile(device, None, sampling))?;
+                let program = timings.time("compile", || {
+                    ClTracer::compile_masked(device, None, sampling, masks)
+                })?;
                 let triangles = all();
                 let emitters =
                     timings.time("lights", || Emitters::new(&triangles, &materials.list));
                 let tracer = timings.time("upload", || -> Result<ClTracer> {
                     let mut t = ClTracer::brute(device, &program, &triangles)?;
-                    t.set_lights(&materials.list, &emitters)?;
+                    t.set_surface(&surface)?;
+                    t.set_lights(&emitters)?;
                     Ok(t)
                 })?;
                 (
@@ -206,11 +226,13 @@ impl<'d> Renderer<'d> {
                 let emitters =
                     timings.time("lights", || Emitters::new(&laid.triangles, &materials.list));
                 let program = timings.time("compile", || {
-                    ClTracer::compile(device, Some((laid.layout, laid.stack_size)), sampling)
+                    let bvh = Some((laid.layout, laid.stack_size));
+                    ClTracer::compile_masked(device, bvh, sampling, masks)
                 })?;
                 let tracer = timings.time("upload", || -> Result<ClTracer> {
                     let mut t = ClTracer::with_layout(device, &program, &laid)?;
-                    t.set_lights(&materials.list, &emitters)?;
+                    t.set_surface(&surface)?;
+                    t.set_lights(&emitters)?;
                     if let Some(shape) = options.work_group {
                         // A cache that no longer fits the device is ignored, not fatal.
                         let _ = t.set_work_group(shape);
@@ -227,7 +249,7 @@ impl<'d> Renderer<'d> {
         };
         Ok(Renderer {
             tracer,
-            materials: materials.list.clone(),
+            surface,
             emitters,
             bvh,
             scene_bytes,
@@ -254,13 +276,14 @@ impl<'d> Renderer<'d> {
             };
             (frame, times)
         };
+        let surface = &self.surface;
         let traced = match &mut self.tracer {
             Tracer::CpuBrute(t) => cpu_trace(
-                &|row| cpu::render(t, &camera.pinhole(), w, h, shade, Some(row)),
+                &|row| cpu::render_surface(t, surface, &camera.pinhole(), w, h, shade, Some(row)),
                 pixels * t.triangles.len() as u64 > 1 << 30,
             ),
             Tracer::CpuBvh(t) => cpu_trace(
-                &|row| cpu::render(t, &camera.pinhole(), w, h, shade, Some(row)),
+                &|row| cpu::render_surface(t, surface, &camera.pinhole(), w, h, shade, Some(row)),
                 pixels > 1 << 24,
             ),
             Tracer::Cl(t) => {
@@ -320,7 +343,7 @@ impl<'d> Renderer<'d> {
                     }
                     integrator::render_samples(
                         host,
-                        &self.materials,
+                        &self.surface,
                         &self.emitters,
                         &pinhole,
                         settings,

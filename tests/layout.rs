@@ -16,7 +16,9 @@ use cltrace::device::tracer::STATUS_STACK_OVERFLOW;
 use cltrace::device::{ClDevice, ClTracer, Kernel, shared_constants};
 use cltrace::input::generate::Generator;
 use cltrace::intersect::{ROBUST_EXIT, Triangle};
-use cltrace::material::Material;
+
+use cltrace::material::texture::TextureInfo;
+use cltrace::material::{Material, Wrap, surface};
 use cltrace::render::integrator::{
     Accumulation, Lighting, MAX_SAMPLE_RADIANCE, RADIANCE_SCALE, ROULETTE_AFTER, SHADOW_AMBIENT,
     SampleSettings,
@@ -94,6 +96,9 @@ fn device_structs_match_the_rust_structs() {
             "Material.occlusion_texture",
             offset_of!(Material, occlusion_texture),
         ),
+        ("sizeof(TextureInfo)", size_of::<TextureInfo>()),
+        ("TextureInfo.levels", offset_of!(TextureInfo, levels)),
+        ("TextureInfo.wrap_v", offset_of!(TextureInfo, wrap_v)),
         ("sizeof(Bin64Node)", size_of::<Bin64Node>()),
         ("Bin64Node.right_xy", offset_of!(Bin64Node, right_xy)),
         ("Bin64Node.z", offset_of!(Bin64Node, z)),
@@ -155,6 +160,14 @@ fn device_constants_match_the_rust_constants() {
         ("MAX_SAMPLE_RADIANCE", MAX_SAMPLE_RADIANCE.to_bits()),
         ("ROBUST_EXIT", ROBUST_EXIT.to_bits()),
         ("NO_TEXTURE", cltrace::material::NO_TEXTURE as u32),
+        ("WRAP_REPEAT", Wrap::Repeat.code()),
+        ("WRAP_CLAMP", Wrap::Clamp.code()),
+        ("WRAP_MIRROR", Wrap::Mirror.code()),
+        ("SURFACE_NORMALS", surface::SURFACE_NORMALS),
+        ("SURFACE_UVS", surface::SURFACE_UVS),
+        ("SURFACE_COLORS", surface::SURFACE_COLORS),
+        ("TRIANGLE_MASKED", cltrace::intersect::TRIANGLE_MASKED),
+        ("BOUNCE_CONE_SPREAD", surface::BOUNCE_CONE_SPREAD.to_bits()),
     ];
     // The probe reports every constant the host defines for the kernels, none left out.
     let shared: Vec<&str> = shared_constants().iter().map(|c| c.0).collect();

@@ -13,7 +13,8 @@ const LAYERS: &[&[&str]] = &[
     &["error", "geometry", "hash"],
     &["mesh", "camera", "interrupt"],
     &["intersect", "animation"],
-    &["material", "brute", "bvh"],
+    &["material"],
+    &["brute", "bvh"],
     &["render", "report"],
     // Files in and out.
     &["input", "output"],

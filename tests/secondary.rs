@@ -72,6 +72,7 @@ fn accumulate_with(
         layout: Some(layout),
         work_group: None,
         sampling: true,
+        crease_angle: None,
     };
     let mut renderer = Renderer::prepare(
         method,

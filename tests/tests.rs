@@ -24,5 +24,6 @@ mod program_cache;
 mod run_report;
 mod secondary;
 mod slurm;
+mod surfaces;
 mod tracers;
 mod watertight;

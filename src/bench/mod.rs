@@ -296,6 +296,7 @@ fn run_into(
                         layout: Some(layout),
                         work_group: None,
                         sampling: false,
+                        crease_angle: None,
                     };
                     let mut renderer = Renderer::prepare(
                         method,

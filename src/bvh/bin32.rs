@@ -78,7 +78,13 @@ impl ClosestHit for Bin32Bvh {
         &self.triangles
     }
 
-    fn trace(&self, ray: &Ray, t_max: f32, any_hit: bool) -> Option<(usize, f32)> {
+    fn trace_filtered(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        any_hit: bool,
+        keeps: &dyn Fn(usize, &WatertightRay) -> bool,
+    ) -> Option<(usize, f32)> {
         let tri_ray = WatertightRay::new(ray);
         let box_ray = RayBox::new(ray);
         let mut t = t_max;
@@ -92,7 +98,10 @@ impl ClosestHit for Bin32Bvh {
             if n.is_leaf() {
                 let first = n.left_or_first as usize;
                 for i in first..first + n.count() as usize {
-                    if let Some(h) = tri_ray.intersect_stored(&self.triangles[i], t) {
+                    if let Some(h) = tri_ray
+                        .intersect_stored(&self.triangles[i], t)
+                        .filter(|_| keeps(i, &tri_ray))
+                    {
                         t = h;
                         best = Some((i, h));
                         if any_hit {

@@ -184,6 +184,13 @@ pub(crate) fn check_sampling(render: &RenderSettings) -> Result<()> {
     range("--spp", render.spp, 1, MAX_SPP)?;
     range("--ao-samples", render.ao_samples, 1, MAX_AO_SAMPLES)?;
     range("--max-bounces", render.max_bounces, 0, MAX_BOUNCES)?;
+    if let Some(a) = render.crease_angle
+        && !(0.0..=180.0).contains(&a)
+    {
+        return Err(Error::Invalid(format!(
+            "--crease-angle {a} is out of range: use 0 to 180 degrees"
+        )));
+    }
     if let Some(d) = render.ao_distance
         && !(d > 0.0 && d.is_finite())
     {
@@ -444,6 +451,7 @@ fn render_with(
         layout: render.layout.or(tuned.as_ref().map(|t| t.layout)),
         work_group: tuned.map(|t| t.work_group),
         sampling: sampling.is_some(),
+        crease_angle: render.crease_angle,
     };
     let tuned = device.and_then(tuned_for);
     let mut renderers = match devices.len() {
@@ -628,7 +636,14 @@ fn render_with(
     }
     if let Some((acc, samples)) = accumulation.filter(|_| part.is_some()) {
         let part = crate::output::part::Part {
-            settings: part_settings(&mesh, &materials, &camera, shade.shade, &sampling),
+            settings: part_settings(
+                &mesh,
+                &materials,
+                &camera,
+                shade.shade,
+                &sampling,
+                render.crease_angle,
+            ),
             accumulation: acc,
             samples,
             shade: shade.shade,
@@ -742,12 +757,24 @@ fn part_settings(
     camera: &Camera,
     shade: Shade,
     sampling: &Option<(SampleSettings, u32)>,
+    crease_angle: Option<f32>,
 ) -> String {
     let mut bytes: Vec<u8> = Vec::new();
-    for p in &mesh.positions {
-        for c in p.to_array() {
-            bytes.extend(c.to_le_bytes());
-        }
+    let floats = mesh
+        .positions
+        .iter()
+        .chain(&mesh.normals)
+        .chain(&mesh.colors)
+        .flat_map(|p| p.to_array())
+        .chain(mesh.uvs.iter().flat_map(|t| t.to_array()))
+        .chain(
+            materials
+                .textures
+                .iter()
+                .flat_map(|t| t.texels.iter().flatten().copied()),
+        );
+    for c in floats {
+        bytes.extend(c.to_le_bytes());
     }
     for t in &mesh.triangles {
         for i in t {
@@ -770,6 +797,10 @@ fn part_settings(
             camera.fov
         ),
         format!("shade={}", shade.name()),
+        format!(
+            "crease={:?}",
+            crease_angle.unwrap_or(crate::mesh::DEFAULT_CREASE_ANGLE)
+        ),
     ];
     if let Some((s, _)) = sampling {
         lines.push(format!("lighting={:?}", s.lighting));

@@ -31,7 +31,8 @@ ocl_prm!(
     crate::intersect::Triangle,
     crate::bvh::Bin32Node,
     crate::render::Hit,
-    crate::material::Material
+    crate::material::Material,
+    crate::material::texture::TextureInfo
 );
 
 /// The layout for a device nobody has tuned: wide nodes for CPUs (their boxes go through

@@ -29,6 +29,8 @@ const FILES: &[(&str, &str)] = &[
     ("common.cl", include_str!("../../cl/common.cl")),
     ("intersect.cl", include_str!("../../cl/intersect.cl")),
     ("camera.cl", include_str!("../../cl/camera.cl")),
+    ("texture.cl", include_str!("../../cl/texture.cl")),
+    ("surface.cl", include_str!("../../cl/surface.cl")),
     ("nodes.cl", include_str!("../../cl/nodes.cl")),
     ("traverse.cl", include_str!("../../cl/traverse.cl")),
     ("bin32.cl", include_str!("../../cl/bin32.cl")),
@@ -89,6 +91,7 @@ fn hex_float(v: f32) -> String {
 /// once, in Rust, and defined in front of every program. `tests/layout.rs` has the probe
 /// kernel report each as the device compiler sees it.
 pub fn shared_constants() -> Vec<(&'static str, Constant)> {
+    use crate::material::{Wrap, surface};
     use crate::render::{Shade, integrator, sampling};
     use Constant::*;
     vec![
@@ -109,6 +112,14 @@ pub fn shared_constants() -> Vec<(&'static str, Constant)> {
         ("MAX_SAMPLE_RADIANCE", F32(integrator::MAX_SAMPLE_RADIANCE)),
         ("ROBUST_EXIT", F32(crate::intersect::ROBUST_EXIT)),
         ("NO_TEXTURE", I32(crate::material::NO_TEXTURE)),
+        ("WRAP_REPEAT", U32(Wrap::Repeat.code())),
+        ("WRAP_CLAMP", U32(Wrap::Clamp.code())),
+        ("WRAP_MIRROR", U32(Wrap::Mirror.code())),
+        ("SURFACE_NORMALS", U32(surface::SURFACE_NORMALS)),
+        ("SURFACE_UVS", U32(surface::SURFACE_UVS)),
+        ("SURFACE_COLORS", U32(surface::SURFACE_COLORS)),
+        ("TRIANGLE_MASKED", U32(crate::intersect::TRIANGLE_MASKED)),
+        ("BOUNCE_CONE_SPREAD", F32(surface::BOUNCE_CONE_SPREAD)),
     ]
 }
 
@@ -173,9 +184,15 @@ fn layout_defines(layout: Layout, stack_size: u32) -> Vec<String> {
 /// The files of a tracing program in order: for a BVH in `layout` (`None`: brute force),
 /// with `sampling` the progressive shade modes too.
 fn program_files(layout: Option<Layout>, sampling: bool) -> Vec<String> {
-    let mut files: Vec<String> = ["common.cl", "intersect.cl", "camera.cl"]
-        .map(String::from)
-        .to_vec();
+    let mut files: Vec<String> = [
+        "common.cl",
+        "intersect.cl",
+        "camera.cl",
+        "texture.cl",
+        "surface.cl",
+    ]
+    .map(String::from)
+    .to_vec();
     match layout {
         Some(layout) => {
             files.extend(["nodes.cl", "traverse.cl"].map(String::from));
@@ -191,7 +208,7 @@ fn program_files(layout: Option<Layout>, sampling: bool) -> Vec<String> {
 }
 
 /// The files of the probe program: the shared structs, every node struct, the probe.
-const PROBE_FILES: [&str; 3] = ["common.cl", "nodes.cl", "probe.cl"];
+const PROBE_FILES: [&str; 4] = ["common.cl", "texture.cl", "nodes.cl", "probe.cl"];
 
 /// The source of a program: the constants header, then each file after a `#line` naming
 /// it, so that a build log points into the file itself.
@@ -261,11 +278,26 @@ impl ClDevice {
         sampling: bool,
         extra_options: &str,
     ) -> Result<Program> {
+        self.compile_program_masked(bvh, sampling, false, extra_options)
+    }
+
+    /// [`ClDevice::compile_program`] for a scene with cut-out masks when `masks`: its
+    /// traversals look each hit's mask up (`ALPHA_MASKS`, cl/traverse.cl).
+    pub fn compile_program_masked(
+        &self,
+        bvh: Option<(Layout, u32)>,
+        sampling: bool,
+        masks: bool,
+        extra_options: &str,
+    ) -> Result<Program> {
         let layout = bvh.map(|(layout, _)| layout);
-        let defines = match bvh {
+        let mut defines = match bvh {
             Some((layout, stack_size)) => layout_defines(layout, stack_size),
             None => Vec::new(),
         };
+        if masks {
+            defines.push("ALPHA_MASKS".into());
+        }
         let kernels = if sampling {
             "trace.cl + integrator.cl"
         } else {

@@ -14,6 +14,8 @@ use crate::error::{Error, Result};
 use crate::geometry::Ray;
 use crate::intersect::Triangle;
 use crate::material::Material;
+use crate::material::surface::Surface;
+use crate::material::texture::TextureInfo;
 use crate::render::integrator::{Accumulation, Emitters, Light, Lighting, Region, SampleSettings};
 use crate::render::{Frame, Hit, ShadeParams};
 use crate::report::Progress;
@@ -76,9 +78,9 @@ impl Kernel {
     /// tests/layout.rs compares them with the device compiler's.
     pub fn parameters(self, bvh: bool) -> Vec<&'static str> {
         let scene = if bvh {
-            BvhSceneParams::NAMES
+            [BvhSceneParams::NAMES, SurfaceParams::NAMES].concat()
         } else {
-            BruteSceneParams::NAMES
+            [BruteSceneParams::NAMES, SurfaceParams::NAMES].concat()
         };
         let own = match self {
             Kernel::TracePrimary => [BandParams::NAMES, PrimaryParams::NAMES].concat(),
@@ -87,7 +89,7 @@ impl Kernel {
                 [LightParams::NAMES, BandParams::NAMES, SampleParams::NAMES].concat()
             }
         };
-        [scene, &own].concat()
+        [scene, own].concat()
     }
 }
 
@@ -129,7 +131,8 @@ macro_rules! kernel_params {
 }
 
 kernel_params! {
-    /// `SCENE_PARAMS` of a BVH program (cl/bin32.cl and the other layouts' files).
+    /// `SCENE_PARAMS` of a BVH program (cl/bin32.cl and the other layouts' files), before
+    /// the surface's.
     struct BvhSceneParams<'a> {
         nodes: &'a ocl::Buffer<u8>,
         tris: &'a ocl::Buffer<Triangle>,
@@ -138,10 +141,24 @@ kernel_params! {
 }
 
 kernel_params! {
-    /// `SCENE_PARAMS` of a brute-force program (cl/brute.cl).
+    /// `SCENE_PARAMS` of a brute-force program (cl/brute.cl), before the surface's.
     struct BruteSceneParams<'a> {
         tris: &'a ocl::Buffer<Triangle>,
         tri_count: u32,
+    }
+}
+
+kernel_params! {
+    /// `SURFACE_PARAMS` (cl/surface.cl), the end of every program's `SCENE_PARAMS`.
+    struct SurfaceParams<'a> {
+        materials: &'a ocl::Buffer<Material>,
+        corners: &'a ocl::Buffer<u32>,
+        normals: &'a ocl::Buffer<f32>,
+        uvs: &'a ocl::Buffer<f32>,
+        vertex_colors: &'a ocl::Buffer<f32>,
+        textures: &'a ocl::Buffer<TextureInfo>,
+        texels: &'a ocl::Buffer<u16>,
+        surface_flags: u32,
     }
 }
 
@@ -256,10 +273,9 @@ kernel_params! {
 }
 
 kernel_params! {
-    /// `LIGHT_PARAMS` (cl/integrator.cl): the materials and the emitting triangles, with
-    /// the cumulative distribution of their areas.
+    /// `LIGHT_PARAMS` (cl/integrator.cl): the emitting triangles, with the cumulative
+    /// distribution of their areas.
     struct LightParams<'a> {
-        materials: &'a ocl::Buffer<Material>,
         emitters: &'a ocl::Buffer<u32>,
         emitter_cdf: &'a ocl::Buffer<f32>,
         emitter_count: u32,
@@ -303,6 +319,64 @@ struct Scene {
     triangles: ocl::Buffer<Triangle>,
     count: u32,
     bvh: Option<DeviceBvh>,
+    surface: DeviceSurface,
+}
+
+/// The surface's buffers (`SURFACE_PARAMS`); an empty array of the host's is one zero here,
+/// since buffers cannot be empty.
+struct DeviceSurface {
+    materials: ocl::Buffer<Material>,
+    corners: ocl::Buffer<u32>,
+    normals: ocl::Buffer<f32>,
+    uvs: ocl::Buffer<f32>,
+    colors: ocl::Buffer<f32>,
+    textures: ocl::Buffer<TextureInfo>,
+    texels: ocl::Buffer<u16>,
+    flags: u32,
+}
+
+impl DeviceSurface {
+    fn upload(device: &ClDevice, surface: &Surface) -> Result<Self> {
+        fn some<T: Clone + Default>(v: &[T]) -> Vec<T> {
+            if v.is_empty() {
+                vec![T::default()]
+            } else {
+                v.to_vec()
+            }
+        }
+        let materials = match surface.materials.is_empty() {
+            true => vec![Material::default()],
+            false => surface.materials.clone(),
+        };
+        let doing = "uploading the surface data";
+        Ok(DeviceSurface {
+            materials: upload(device, &materials, "uploading materials")?,
+            corners: upload(device, &some(&surface.corners), doing)?,
+            normals: upload(device, &some(&surface.normals), doing)?,
+            uvs: upload(device, &some(&surface.uvs), doing)?,
+            colors: upload(device, &some(&surface.colors), doing)?,
+            textures: upload(device, &some(&surface.textures.infos), "uploading textures")?,
+            texels: upload(
+                device,
+                &some(&surface.textures.texels),
+                "uploading textures",
+            )?,
+            flags: surface.flags,
+        })
+    }
+
+    fn params(&self) -> SurfaceParams<'_> {
+        SurfaceParams {
+            materials: &self.materials,
+            corners: &self.corners,
+            normals: &self.normals,
+            uvs: &self.uvs,
+            vertex_colors: &self.colors,
+            textures: &self.textures,
+            texels: &self.texels,
+            surface_flags: self.flags,
+        }
+    }
 }
 
 /// The BVH's nodes (in whichever layout the program was compiled for) and the kernels'
@@ -312,9 +386,8 @@ struct DeviceBvh {
     status: ocl::Buffer<u32>,
 }
 
-/// What the shade modes read besides the geometry (`LIGHT_PARAMS` in cl/integrator.cl).
+/// What the shade modes read besides the scene (`LIGHT_PARAMS` in cl/integrator.cl).
 struct DeviceLights {
-    materials: ocl::Buffer<Material>,
     emitters: ocl::Buffer<u32>,
     cdf: ocl::Buffer<f32>,
     count: u32,
@@ -388,6 +461,16 @@ impl<'d> ClTracer<'d> {
         device.compile_program(bvh, sampling, "")
     }
 
+    /// [`ClTracer::compile`] for a scene that has cut-out masks when `masks`.
+    pub fn compile_masked(
+        device: &'d ClDevice,
+        bvh: Option<(Layout, u32)>,
+        sampling: bool,
+        masks: bool,
+    ) -> Result<Program> {
+        device.compile_program_masked(bvh, sampling, masks, "")
+    }
+
     /// Uploads the triangles (in file order) for the brute-force kernels.
     pub fn brute(device: &'d ClDevice, program: &Program, triangles: &[Triangle]) -> Result<Self> {
         check_program(program, None)?;
@@ -396,6 +479,7 @@ impl<'d> ClTracer<'d> {
             triangles: upload(device, triangles, "uploading triangles")?,
             count: triangles.len() as u32,
             bvh: None,
+            surface: DeviceSurface::upload(device, &Surface::default())?,
         };
         // About 16 million ray/triangle tests in the first launch.
         Self::new(
@@ -463,6 +547,7 @@ impl<'d> ClTracer<'d> {
                 nodes: upload(device, nodes, "uploading BVH nodes")?,
                 status,
             }),
+            surface: DeviceSurface::upload(device, &Surface::default())?,
         };
         Self::new(device, program, scene, 1 << 16)
     }
@@ -529,9 +614,9 @@ impl<'d> ClTracer<'d> {
         self.image_budget = self.image_budget.min(bytes.max(1));
     }
 
-    /// Uploads the materials (indexed by the triangles' `material`) and the emitters (indices
-    /// into this tracer's triangle order), which the shade modes need.
-    pub(crate) fn set_lights(&mut self, materials: &[Material], emitters: &Emitters) -> Result<()> {
+    /// Uploads the emitters (indices into this tracer's triangle order), which the shade
+    /// modes need.
+    pub(crate) fn set_lights(&mut self, emitters: &Emitters) -> Result<()> {
         let device = self.device;
         // Buffers cannot be empty: a lone zero stands in for "no emitters".
         let (list, cdf) = if emitters.is_empty() {
@@ -540,12 +625,39 @@ impl<'d> ClTracer<'d> {
             (emitters.triangles.clone(), emitters.cdf.clone())
         };
         self.lights = Some(DeviceLights {
-            materials: upload(device, materials, "uploading materials")?,
             emitters: upload(device, &list, "uploading emitters")?,
             cdf: upload(device, &cdf, "uploading emitters")?,
             count: emitters.triangles.len() as u32,
             area: emitters.total_area,
         });
+        Ok(())
+    }
+
+    /// Uploads the surface (materials, vertex data, textures) the kernels shade with,
+    /// within the device's memory, after checking that it fits. The program must have been
+    /// compiled with masks if the surface has any.
+    pub(crate) fn set_surface(&mut self, surface: &Surface) -> Result<()> {
+        let device = self.device;
+        let textures = surface.textures.bytes();
+        check_scene_memory(
+            device,
+            &[
+                (
+                    "triangles",
+                    self.scene.count as u64 * size_of::<Triangle>() as u64,
+                ),
+                ("surface data", surface.bytes() - textures),
+                ("textures", textures),
+            ],
+        )?;
+        self.scene.surface = DeviceSurface::upload(device, surface)?;
+        let kernel = Kernel::TracePrimary;
+        let mut builder = kernel_builder(device, &self.program, kernel, &self.scene)?;
+        BandParams::default().bind(&mut builder);
+        PrimaryParams::default().bind(&mut builder);
+        self.primary = builder
+            .build()
+            .map_err(|e| device.error(&format!("creating the {} kernel", kernel.name()), e))?;
         Ok(())
     }
 
@@ -680,7 +792,7 @@ impl<'d> ClTracer<'d> {
         require_kernel(&self.program, kernel)?;
         let name = kernel.name();
         if self.lights.is_none() {
-            self.set_lights(&[Material::default()], &Emitters::default())?;
+            self.set_lights(&Emitters::default())?;
         }
         let lights = self.lights.as_ref().expect("set above");
         let accum = PitchedBuffer::<Long4>::read_write(device, w, rows)?;
@@ -712,7 +824,6 @@ impl<'d> ClTracer<'d> {
             col_end: region.x1,
         };
         let light_params = LightParams {
-            materials: &lights.materials,
             emitters: &lights.emitters,
             emitter_cdf: &lights.cdf,
             emitter_count: lights.count,
@@ -1060,6 +1171,7 @@ fn kernel_builder<'b>(
         }
         .bind(&mut builder),
     }
+    scene.surface.params().bind(&mut builder);
     Ok(builder)
 }
 

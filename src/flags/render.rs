@@ -174,6 +174,9 @@ struct SettingsArgs {
 
     #[arg(long, allow_hyphen_values = true, help = help::light())]
     light: Option<String>,
+
+    #[arg(long, value_name = "DEGREES", help = help::crease_angle())]
+    crease_angle: Option<f32>,
 }
 
 impl From<SettingsArgs> for RenderSettings {
@@ -188,6 +191,7 @@ impl From<SettingsArgs> for RenderSettings {
             ao_distance: a.ao_distance,
             max_bounces: a.max_bounces,
             light: a.light,
+            crease_angle: a.crease_angle,
         }
     }
 }
@@ -317,6 +321,16 @@ mod help {
             or_scene(format_args!(
                 "{AO_DISTANCE_SHARE} of the scene's bounding radius"
             ))
+        )
+    }
+
+    pub fn crease_angle() -> String {
+        use cltrace::mesh::DEFAULT_CREASE_ANGLE;
+        format!(
+            "Smooth normals where the mesh has none: faces meeting at less than this angle \
+             shade as one curved surface, sharper edges stay sharp; 0 renders faceted \
+             {}",
+            or_scene(format_args!("{DEFAULT_CREASE_ANGLE} degrees"))
         )
     }
 

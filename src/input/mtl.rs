@@ -1,11 +1,17 @@
 //! Materials of an OBJ file from its MTL library, through `tobj`: the diffuse colour `Kd`
-//! and the emitted radiance `Ke` of each material, mapped onto the triangles.
+//! and the emitted radiance `Ke` of each material, mapped onto the triangles, and their
+//! textures: `map_Kd` (base colour, sRGB), `map_Ke` (emission, sRGB), `map_d` (cut-out
+//! mask: alpha below 0.5 is a hole) and `norm`/`map_Bump`/`bump` (tangent-space normal
+//! map), with the options `-clamp on|off` and `-bm` (the normal map's strength); other
+//! options are read past. Texture paths are relative to the OBJ file's folder.
 
 use std::cell::RefCell;
 use std::path::Path;
 
+use crate::error::Result;
 use crate::input::io_reason;
-use crate::material::{Material, Materials};
+use crate::input::texture::{ColorSpace, load_texture};
+use crate::material::{Material, Materials, Texture, Wrap};
 
 /// Reads the material library `name` (as an OBJ's `mtllib` names it) beside `obj`. tobj
 /// keeps only an error's kind, so what went wrong, with the path tried, is added to
@@ -107,7 +113,7 @@ pub(super) fn assign(
     library: Result<Vec<tobj::Material>, tobj::LoadError>,
     failures: Vec<String>,
     obj: &Path,
-) -> (Materials, Vec<String>) {
+) -> Result<(Materials, Vec<String>)> {
     // tobj reports an error only when an `mtllib` was named and none could be read.
     let (list, outcome, error) = match library {
         Ok(list) => (list, "triangles with its materials are grey", None),
@@ -124,10 +130,15 @@ pub(super) fn assign(
         ));
     }
     if list.is_empty() {
-        return (Materials::default(), warnings);
+        return Ok((Materials::default(), warnings));
     }
     let mut materials = vec![Material::default()];
     materials.extend(list.iter().map(convert));
+    let mut textures = Textures::default();
+    let folder = obj.parent().unwrap_or(Path::new(""));
+    for (m, ours) in list.iter().zip(&mut materials[1..]) {
+        textures.attach(m, ours, folder, &mut warnings)?;
+    }
     let per_triangle = models
         .iter()
         .zip(triangles)
@@ -140,19 +151,170 @@ pub(super) fn assign(
             std::iter::repeat_n(id, count)
         })
         .collect();
-    (
+    Ok((
         Materials {
             list: materials,
             per_triangle,
-            textures: Vec::new(),
+            textures: textures.list,
         },
         warnings,
-    )
+    ))
+}
+
+/// The textures of a library, each file read once per colour space.
+#[derive(Default)]
+struct Textures {
+    list: Vec<Texture>,
+    seen: Vec<(std::path::PathBuf, ColorSpace, [Wrap; 2], i32)>,
+}
+
+/// A texture line's value split into its options and the file name: `-clamp on` gives
+/// the wrap mode, `-bm x` the strength of a normal map; other options are skipped with as
+/// many values as MTL gives them.
+fn map_options(value: &str) -> (String, Wrap, f32) {
+    let words: Vec<&str> = value.split_whitespace().collect();
+    let (mut wrap, mut strength) = (Wrap::Repeat, 1.0);
+    let mut i = 0;
+    while i < words.len() && words[i].starts_with('-') && words[i].len() > 1 {
+        let takes = match words[i] {
+            "-clamp" => {
+                if words.get(i + 1) == Some(&"on") {
+                    wrap = Wrap::Clamp;
+                }
+                1
+            }
+            "-bm" => {
+                strength = words.get(i + 1).and_then(|w| w.parse().ok()).unwrap_or(1.0);
+                1
+            }
+            "-o" | "-s" | "-t" => {
+                // one to three numbers
+                let numbers = words[i + 1..]
+                    .iter()
+                    .take(3)
+                    .take_while(|w| w.parse::<f32>().is_ok())
+                    .count();
+                numbers.max(1)
+            }
+            "-mm" => 2,
+            _ => 1,
+        };
+        i += 1 + takes;
+    }
+    (words[i.min(words.len())..].join(" "), wrap, strength)
+}
+
+impl Textures {
+    /// Fills `ours`' texture slots from `m`'s maps. A missing file is a warning (a
+    /// missing base colour map leaves the surface grey); a file that does not decode is
+    /// an error.
+    fn attach(
+        &mut self,
+        m: &tobj::Material,
+        ours: &mut Material,
+        folder: &Path,
+        warnings: &mut Vec<String>,
+    ) -> Result<()> {
+        let normal = m
+            .normal_texture
+            .clone()
+            .or_else(|| m.unknown_param.get("norm").cloned());
+        let maps = [
+            (m.diffuse_texture.clone(), ColorSpace::Srgb, "map_Kd"),
+            (
+                m.unknown_param.get("map_Ke").cloned(),
+                ColorSpace::Srgb,
+                "map_Ke",
+            ),
+            (m.dissolve_texture.clone(), ColorSpace::Linear, "map_d"),
+            (normal, ColorSpace::Linear, "norm"),
+        ];
+        for (value, space, key) in maps {
+            let Some(value) = value else { continue };
+            let (name, wrap, strength) = map_options(&value);
+            if name.is_empty() {
+                continue;
+            }
+            let path = folder.join(&name);
+            if !path.is_file() {
+                warnings.push(format!(
+                    "material {}: its {key} texture {} is missing{}",
+                    m.name,
+                    path.display(),
+                    match key {
+                        "map_Kd" => "; the surface is grey",
+                        _ => "; it is left out",
+                    }
+                ));
+                if key == "map_Kd" {
+                    ours.albedo = crate::material::DEFAULT_ALBEDO;
+                }
+                continue;
+            }
+            let index = self.load(&path, space, [wrap; 2], key == "map_d")?;
+            match key {
+                "map_Kd" => ours.base_texture = index,
+                "map_Ke" => {
+                    ours.emission_texture = index;
+                    // A map without a Ke factor glows as the map says.
+                    if !ours.emits() {
+                        ours.emission = [1.0; 3];
+                    }
+                }
+                "map_d" => {
+                    ours.alpha_texture = index;
+                    ours.alpha_cutoff = 0.5;
+                }
+                _ => {
+                    ours.normal_texture = index;
+                    ours.normal_scale = strength;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The index of the texture of `path` read in `space`, reading it the first time. A
+    /// `mask` takes its alpha from the file's alpha channel, or from its red channel when
+    /// it has none (a grey-scale `map_d`).
+    fn load(&mut self, path: &Path, space: ColorSpace, wrap: [Wrap; 2], mask: bool) -> Result<i32> {
+        let key = (path.to_path_buf(), space, wrap);
+        if let Some(seen) = self
+            .seen
+            .iter()
+            .find(|s| (&s.0, s.1, s.2) == (&key.0, key.1, key.2))
+        {
+            return Ok(seen.3);
+        }
+        let mut texture = load_texture(path, space, wrap)?;
+        if mask && texture.texels.iter().all(|t| t[3] == 1.0) {
+            for t in &mut texture.texels {
+                t[3] = t[0];
+            }
+        }
+        let index = self.list.len() as i32;
+        self.list.push(texture);
+        self.seen.push((key.0, key.1, key.2, index));
+        Ok(index)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn texture_options_are_read_and_the_name_kept() {
+        assert_eq!(
+            map_options("wood.png"),
+            ("wood.png".into(), Wrap::Repeat, 1.0)
+        );
+        assert_eq!(
+            map_options("-clamp on -bm 0.5 -s 2 2 1 my wood.png"),
+            ("my wood.png".into(), Wrap::Clamp, 0.5)
+        );
+        assert_eq!(map_options("-o 0.5 n.png").0, "n.png");
+    }
 
     #[test]
     fn kd_and_ke_and_the_ambient_convention() {

@@ -110,7 +110,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8], read_materials: bool) -> Result<M
     let materials = match read_materials {
         true => {
             let failures = failures.into_inner();
-            let (materials, failed) = mtl::assign(&models, &per_model, library, failures, path);
+            let (materials, failed) = mtl::assign(&models, &per_model, library, failures, path)?;
             warnings.extend(failed);
             materials
         }

@@ -135,6 +135,9 @@ pub struct RenderSettings {
     /// The light of the shadow mode: `sun:x,y,z` or `point:x,y,z`.
     #[serde(default, deserialize_with = "checked_light")]
     pub light: Option<String>,
+    /// Smooth normals for corners the mesh gives none: the crease angle in degrees, 0 to
+    /// 180 (0: faceted).
+    pub crease_angle: Option<f32>,
 }
 
 /// A scene file's `light`, checked as it is read, so that a bad one is an error at its
@@ -159,6 +162,7 @@ impl RenderSettings {
             ao_distance: self.ao_distance.or(base.ao_distance),
             max_bounces: self.max_bounces.or(base.max_bounces),
             light: self.light.or(base.light),
+            crease_angle: self.crease_angle.or(base.crease_angle),
         }
     }
 }

@@ -6,6 +6,7 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::intersect::Triangle;
 
+pub mod surface;
 pub mod texture;
 
 pub use texture::{Texture, Wrap};
@@ -133,10 +134,15 @@ impl Default for Materials {
 }
 
 impl Materials {
-    /// Stores each triangle's material index (looked up by its file-order index).
+    /// Stores each triangle's material index (looked up by its file-order index), and
+    /// marks the triangles of masked materials.
     pub(crate) fn assign(&self, triangles: &mut [Triangle]) {
         for t in triangles {
             t.material = self.index_of(t.prim as usize);
+            t.flags = match self.list[t.material as usize].is_masked() {
+                true => crate::intersect::TRIANGLE_MASKED,
+                false => 0,
+            };
         }
     }
 

@@ -4,9 +4,8 @@
 //! edges sharper than the crease stay sharp. A position whose corners end up with
 //! different normals is split into one vertex per normal.
 
-use std::collections::HashMap;
-
 use glam::Vec3;
+use rayon::prelude::*;
 
 use super::Mesh;
 
@@ -39,89 +38,93 @@ impl Mesh {
         }
         let cos_crease = crease_degrees.min(180.0).to_radians().cos();
         let faces: Vec<Vec3> = (0..self.triangles.len())
+            .into_par_iter()
             .map(|i| {
                 let [a, b, c] = self.corners(i);
                 (b - a).cross(c - a).normalize_or_zero()
             })
             .collect();
-        // Corners grouped by exact position: files often repeat a vertex per face.
-        let mut around: HashMap<[u32; 3], Vec<(u32, u8)>> = HashMap::new();
-        for (i, tri) in self.triangles.iter().enumerate() {
-            for (k, &v) in tri.iter().enumerate() {
-                if !has(v) {
-                    let key = self.positions[v as usize].to_array().map(f32::to_bits);
-                    around.entry(key).or_default().push((i as u32, k as u8));
-                }
-            }
-        }
-        let angle = |i: u32, k: u8| {
-            let p = self.corners(i as usize);
-            let k = k as usize;
-            let (e1, e2) = (p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]);
-            e1.angle_between(e2)
+        // Corners (3 triangle + k) without a normal, grouped by exact position: files often
+        // repeat a vertex per face. Sorting, not hashing: millions of corners sort fast.
+        let key = |c: u32| {
+            let v = self.triangles[c as usize / 3][c as usize % 3];
+            self.positions[v as usize].to_array().map(f32::to_bits)
         };
-        let mut corner_normal: HashMap<(u32, u8), Vec3> = HashMap::new();
-        for corners in around.values() {
-            let weighted: Vec<Vec3> = corners
-                .iter()
-                .map(|&(i, k)| {
-                    let w = angle(i, k);
-                    faces[i as usize] * if w.is_finite() { w } else { 0.0 }
+        let mut corners: Vec<u32> = (0..3 * self.triangles.len() as u32)
+            .filter(|&c| !has(self.triangles[c as usize / 3][c as usize % 3]))
+            .collect();
+        corners.par_sort_unstable_by_key(|&c| key(c));
+        let angle = |c: u32| {
+            let p = self.corners(c as usize / 3);
+            let k = c as usize % 3;
+            let w = (p[(k + 1) % 3] - p[k]).angle_between(p[(k + 2) % 3] - p[k]);
+            if w.is_finite() { w } else { 0.0 }
+        };
+        let groups: Vec<&[u32]> = corners.chunk_by(|&a, &b| key(a) == key(b)).collect();
+        let faces = &faces;
+        let normals: Vec<(u32, Vec3)> = groups
+            .par_iter()
+            .flat_map_iter(|group| {
+                let weighted: Vec<Vec3> = group
+                    .iter()
+                    .map(|&c| faces[c as usize / 3] * angle(c))
+                    .collect();
+                let all: Vec3 = weighted.iter().sum();
+                group.iter().map(move |&c| {
+                    let own = faces[c as usize / 3];
+                    let n = if group.len() > MAX_PAIRWISE {
+                        all
+                    } else {
+                        group
+                            .iter()
+                            .zip(&weighted)
+                            .filter(|(other, _)| faces[**other as usize / 3].dot(own) >= cos_crease)
+                            .map(|(_, w)| *w)
+                            .sum::<Vec3>()
+                    };
+                    (c, n.normalize_or_zero())
                 })
-                .collect();
-            for &(i, k) in corners {
-                let own = faces[i as usize];
-                let n = if corners.len() > MAX_PAIRWISE {
-                    weighted.iter().sum::<Vec3>()
-                } else {
-                    corners
-                        .iter()
-                        .zip(&weighted)
-                        .filter(|((other, _), _)| faces[*other as usize].dot(own) >= cos_crease)
-                        .map(|(_, w)| *w)
-                        .sum::<Vec3>()
-                };
-                corner_normal.insert((i, k), n.normalize_or_zero());
-            }
-        }
-        self.split_by_normal(&corner_normal);
+            })
+            .collect();
+        self.split_by_normal(normals);
     }
 
-    /// Renumbers vertices so that each corner in `normals` has its own normal: corners of
-    /// one vertex with equal normals share a vertex, others get copies.
-    fn split_by_normal(&mut self, normals: &HashMap<(u32, u8), Vec3>) {
+    /// Gives each corner (3 triangle + k) in `normals` its normal: corners of one vertex
+    /// with equal normals share it, others get copies of the vertex.
+    fn split_by_normal(&mut self, mut normals: Vec<(u32, Vec3)>) {
         let n = self.positions.len();
         if self.normals.is_empty() {
             self.normals = vec![Vec3::ZERO; n];
         }
-        let mut copies: HashMap<(u32, [u32; 3]), u32> = HashMap::new();
-        let mut first_use = vec![true; n];
-        for i in 0..self.triangles.len() {
-            for k in 0..3 {
-                let Some(&normal) = normals.get(&(i as u32, k as u8)) else {
-                    continue;
-                };
-                let v = self.triangles[i][k];
-                let key = (v, normal.to_array().map(f32::to_bits));
-                let index = *copies.entry(key).or_insert_with(|| {
-                    if std::mem::take(&mut first_use[v as usize]) {
-                        self.normals[v as usize] = normal;
-                        v
-                    } else {
-                        let copy = self.positions.len() as u32;
-                        self.positions.push(self.positions[v as usize]);
-                        self.normals.push(normal);
-                        if !self.uvs.is_empty() {
-                            self.uvs.push(self.uvs[v as usize]);
-                        }
-                        if !self.colors.is_empty() {
-                            self.colors.push(self.colors[v as usize]);
-                        }
-                        copy
+        let vertex = |c: u32| self.triangles[c as usize / 3][c as usize % 3];
+        // By vertex, then normal, then corner: equal (vertex, normal) runs share a vertex,
+        // and the first run of each vertex keeps its number.
+        normals.par_sort_unstable_by_key(|&(c, n)| (vertex(c), n.to_array().map(f32::to_bits), c));
+        let mut last: Option<(u32, [u32; 3])> = None;
+        let mut index = 0;
+        for (c, normal) in normals {
+            let v = self.triangles[c as usize / 3][c as usize % 3];
+            let bits = normal.to_array().map(f32::to_bits);
+            match last {
+                Some((lv, lb)) if lv == v && lb == bits => {}
+                Some((lv, _)) if lv == v => {
+                    index = self.positions.len() as u32;
+                    self.positions.push(self.positions[v as usize]);
+                    self.normals.push(normal);
+                    if !self.uvs.is_empty() {
+                        self.uvs.push(self.uvs[v as usize]);
                     }
-                });
-                self.triangles[i][k] = index;
+                    if !self.colors.is_empty() {
+                        self.colors.push(self.colors[v as usize]);
+                    }
+                }
+                _ => {
+                    index = v;
+                    self.normals[v as usize] = normal;
+                }
             }
+            last = Some((v, bits));
+            self.triangles[c as usize / 3][c as usize % 3] = index;
         }
     }
 }

@@ -8,12 +8,34 @@ use super::{Frame, Hit, ShadeParams};
 use crate::camera::Pinhole;
 use crate::geometry::Ray;
 use crate::intersect::ClosestHit;
+use crate::material::surface::Surface;
 
 /// Traces one primary ray per pixel. `on_row`, if given, is called after each row. Once
 /// an interruption is asked for ([`crate::interrupt`]) the rows not yet begun are left
 /// empty, for the caller to notice and discard the frame.
 pub fn render(
     tracer: &impl ClosestHit,
+    camera: &Pinhole,
+    width: u32,
+    height: u32,
+    shade: &ShadeParams,
+    on_row: Option<&(dyn Fn() + Sync)>,
+) -> Frame {
+    render_surface(
+        tracer,
+        &Surface::default(),
+        camera,
+        width,
+        height,
+        shade,
+        on_row,
+    )
+}
+
+/// [`render`] of a mesh with shading data: shading normals and cut-out masks.
+pub fn render_surface(
+    tracer: &impl ClosestHit,
+    surface: &Surface,
     camera: &Pinhole,
     width: u32,
     height: u32,
@@ -33,7 +55,7 @@ pub fn render(
             }
             for x in 0..w {
                 let ray = camera.ray(x as u32, y as u32);
-                (hits[x], colors[x]) = pixel(tracer, &ray, shade);
+                (hits[x], colors[x]) = pixel(tracer, surface, &ray, shade);
             }
             if let Some(f) = on_row {
                 f();
@@ -43,19 +65,28 @@ pub fn render(
 }
 
 /// The hit record and colour for one ray, exactly as `store_pixel` in cl/shade.cl.
-pub(crate) fn pixel(tracer: &impl ClosestHit, ray: &Ray, shade: &ShadeParams) -> (Hit, u32) {
-    match tracer.closest_hit(ray, f32::INFINITY) {
+pub(crate) fn pixel(
+    tracer: &impl ClosestHit,
+    surface: &Surface,
+    ray: &Ray,
+    shade: &ShadeParams,
+) -> (Hit, u32) {
+    match super::integrator::trace_masked(tracer, surface, ray, f32::INFINITY, false) {
         None => (Hit::NONE, BACKGROUND),
         Some((i, t)) => {
             let d = ray.dir;
             let distance = t * (d.x * d.x + d.y * d.y + d.z * d.z).sqrt();
             let tri = &tracer.triangles()[i];
+            let n = match shade.shade {
+                super::Shade::Depth => glam::Vec3::ZERO,
+                _ => surface.point(tri, (ray.origin, d), t, 0.0, 0.0).normal,
+            };
             (
                 Hit {
                     prim: tri.prim,
                     t: distance,
                 },
-                shade.color(tri, distance, d),
+                shade.color(n, distance, d),
             )
         }
     }

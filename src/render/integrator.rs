@@ -15,6 +15,7 @@ use crate::geometry::Ray;
 use crate::intersect::ClosestHit;
 use crate::intersect::Triangle;
 use crate::material::Material;
+use crate::material::surface::{BOUNCE_CONE_SPREAD, Surface};
 
 /// Share of the light in `shadow` mode that reaches surfaces the light does not.
 pub const SHADOW_AMBIENT: f32 = 0.1;
@@ -209,10 +210,30 @@ pub(crate) fn facing_normal(t: &Triangle, dir: Vec3) -> Vec3 {
     if n.dot(dir) > 0.0 { -n } else { n }
 }
 
+/// The closest hit of `ray` in `(0, t_max)` (or any hit) that `surface`'s cut-out masks
+/// let through, as the kernels' traversals find it.
+pub(crate) fn trace_masked(
+    tracer: &(impl ClosestHit + ?Sized),
+    surface: &Surface,
+    ray: &Ray,
+    t_max: f32,
+    any_hit: bool,
+) -> Option<(usize, f32)> {
+    let tris = tracer.triangles();
+    tracer.trace_filtered(ray, t_max, any_hit, &|i, r| surface.mask_keeps(&tris[i], r))
+}
+
+/// The width of a camera ray's cone at ray parameter `t` of the unnormalised pixel ray:
+/// `camera_cone` in cl/integrator.cl.
+fn camera_cone(camera: &Pinhole, t: f32) -> f32 {
+    let d = camera.du;
+    t * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+}
+
 /// One sample of pixel (x, y): its radiance and the number of rays traced for it.
 pub(crate) fn sample_pixel(
     tracer: &(impl ClosestHit + ?Sized),
-    materials: &[Material],
+    surface: &Surface,
     emitters: &Emitters,
     camera: &Pinhole,
     settings: &SampleSettings,
@@ -222,36 +243,39 @@ pub(crate) fn sample_pixel(
     let s = Sampler::new(settings.seed, y * width + x, sample);
     let mut ray = jittered_ray(camera, x, y, &s);
     let tris = tracer.triangles();
+    let occluded =
+        |ray: &Ray, t_max: f32| trace_masked(tracer, surface, ray, t_max, true).is_some();
     let mut rays = 1;
-    let Some((i, t)) = tracer.closest_hit(&ray, f32::INFINITY) else {
+    let Some((i, t)) = trace_masked(tracer, surface, &ray, f32::INFINITY, false) else {
         let background = match settings.lighting {
             Lighting::Path { .. } if emitters.is_empty() => sky(ray.dir),
             _ => Vec3::ZERO,
         };
         return (background, rays);
     };
+    let hit_point = |i: usize, ray: &Ray, t: f32, cone: f32| {
+        surface.point(&tris[i], (ray.origin, ray.dir), t, settings.offset, cone)
+    };
     match settings.lighting {
         Lighting::Ao { samples, distance } => {
-            let n = facing_normal(&tris[i], ray.dir);
-            let origin = ray.at(t) + n * settings.offset;
+            let sp = hit_point(i, &ray, t, camera_cone(camera, t));
             let mut open = 0;
             for k in 0..samples {
                 let d = cosine_direction(
-                    n,
+                    sp.ns,
                     s.get(bounce_dim(0) + 2 * k),
                     s.get(bounce_dim(0) + 2 * k + 1),
                 );
-                open += !tracer.occluded(&Ray::new(origin, d), distance) as u32;
+                let ng = sp.ng;
+                open += (d.x * ng.x + d.y * ng.y + d.z * ng.z > 0.0
+                    && !occluded(&Ray::new(sp.origin, d), distance)) as u32;
             }
             rays += samples;
             (Vec3::splat(open as f32 / samples.max(1) as f32), rays)
         }
         Lighting::Shadow { light } => {
-            let tri = &tris[i];
-            let m = &materials[tri.material as usize];
-            let n = facing_normal(tri, ray.dir);
-            let p = ray.at(t);
-            let origin = p + n * settings.offset;
+            let sp = hit_point(i, &ray, t, camera_cone(camera, t));
+            let origin = sp.origin;
             let (l, reach) = match light {
                 Light::Directional(d) => (d.normalize(), f32::INFINITY),
                 Light::Point(q) => {
@@ -259,20 +283,22 @@ pub(crate) fn sample_pixel(
                     (w.normalize(), w.length())
                 }
             };
-            let cos = n.dot(l);
-            let lit = cos > 0.0 && {
+            let cos = sp.ns.dot(l);
+            let ng = sp.ng;
+            let lit = cos > 0.0 && l.x * ng.x + l.y * ng.y + l.z * ng.z > 0.0 && {
                 rays += 1;
-                !tracer.occluded(&Ray::new(origin, l), reach)
+                !occluded(&Ray::new(origin, l), reach)
             };
             let direct = if lit { cos } else { 0.0 };
             let shade = SHADOW_AMBIENT + (1.0 - SHADOW_AMBIENT) * direct;
-            (Vec3::from(m.albedo) * shade + Vec3::from(m.emission), rays)
+            (sp.albedo * shade + sp.emission, rays)
         }
         Lighting::Path { max_bounces } => {
             let mut radiance = Vec3::ZERO;
             let mut throughput = Vec3::ONE;
             let mut hit = Some((i, t));
             let mut bounce = 0;
+            let mut cone = 0.0;
             loop {
                 let Some((i, t)) = hit else {
                     if emitters.is_empty() {
@@ -280,34 +306,38 @@ pub(crate) fn sample_pixel(
                     }
                     break;
                 };
-                let tri = &tris[i];
-                let m = &materials[tri.material as usize];
-                let n = facing_normal(tri, ray.dir);
+                cone = match bounce {
+                    0 => camera_cone(camera, t),
+                    _ => cone + BOUNCE_CONE_SPREAD * t,
+                };
+                let sp = hit_point(i, &ray, t, cone);
                 if bounce == 0 {
                     // Later bounces reach emitters through next-event estimation instead.
-                    radiance += throughput * Vec3::from(m.emission);
+                    radiance += throughput * sp.emission;
                 }
-                let origin = ray.at(t) + n * settings.offset;
-                let albedo = Vec3::from(m.albedo);
+                let (origin, albedo, n, ng) = (sp.origin, sp.albedo, sp.ns, sp.ng);
+                let above = |d: Vec3| d.x * ng.x + d.y * ng.y + d.z * ng.z > 0.0;
                 let dim = bounce_dim(bounce);
                 if !emitters.is_empty() {
                     let e = &tris[emitters.triangles[emitters.pick(s.get(dim))] as usize];
+                    let (u1, u2) = (s.get(dim + 1), s.get(dim + 2));
                     let q = triangle_point(
                         Vec3::from(e.v0),
                         Vec3::from(e.v1),
                         Vec3::from(e.v2),
-                        s.get(dim + 1),
-                        s.get(dim + 2),
+                        u1,
+                        u2,
                     );
                     let w = q - origin;
                     let d2 = w.length_squared();
                     let l = w / d2.sqrt();
                     let cos_here = n.dot(l);
                     let cos_there = facing_normal(e, l).dot(-l);
-                    if cos_here > 0.0 && cos_there > 0.0 {
+                    if cos_here > 0.0 && cos_there > 0.0 && above(l) {
                         rays += 1;
-                        if !tracer.occluded(&Ray::new(origin, l), d2.sqrt() * (1.0 - 1e-4)) {
-                            let le = Vec3::from(materials[e.material as usize].emission);
+                        if !occluded(&Ray::new(origin, l), d2.sqrt() * (1.0 - 1e-4)) {
+                            let su = u1.sqrt();
+                            let le = surface.emitted(e, 1.0 - su, u2 * su);
                             radiance += throughput * albedo / PI
                                 * le
                                 * (cos_here * cos_there / d2 * emitters.total_area);
@@ -326,8 +356,12 @@ pub(crate) fn sample_pixel(
                     throughput /= keep;
                 }
                 ray = Ray::new(origin, cosine_direction(n, s.get(dim + 4), s.get(dim + 5)));
+                // A direction below the geometric surface would leave through it.
+                if !above(ray.dir) {
+                    break;
+                }
                 rays += 1;
-                hit = tracer.closest_hit(&ray, f32::INFINITY);
+                hit = trace_masked(tracer, surface, &ray, f32::INFINITY, false);
                 bounce += 1;
             }
             (radiance, rays)
@@ -522,7 +556,7 @@ pub fn mean_radiance(p: &[i64; 4]) -> [f32; 3] {
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn render_samples(
     tracer: &(impl ClosestHit + ?Sized),
-    materials: &[Material],
+    surface: &Surface,
     emitters: &Emitters,
     camera: &Pinhole,
     settings: &SampleSettings,
@@ -547,7 +581,7 @@ pub(crate) fn render_samples(
                 for s in samples.clone() {
                     let (l, r) = sample_pixel(
                         tracer,
-                        materials,
+                        surface,
                         emitters,
                         camera,
                         settings,

@@ -1,11 +1,11 @@
-//! Shading on the host, mirroring `shade_hit` in cl/shade.cl.
+//! Shading on the host, mirroring `shade_hit` in cl/shade.cl; the normal comes from the
+//! surface (`crate::material::surface`, cl/surface.cl).
 
 use glam::Vec3;
 
 use super::Shade;
 use crate::camera::Camera;
 use crate::geometry::Aabb;
-use crate::intersect::Triangle;
 
 /// What shading needs besides the hit: the mode and, for depth, the distance range that
 /// maps to white..black (the scene's bounding sphere seen from the eye).
@@ -28,17 +28,9 @@ impl ShadeParams {
         ShadeParams { shade, near, far }
     }
 
-    /// The packed RGBA colour of a hit on `tri` at `distance` along `dir`.
-    pub(crate) fn color(&self, tri: &Triangle, distance: f32, dir: Vec3) -> u32 {
-        let v0 = Vec3::from(tri.v0);
-        let e1 = Vec3::from(tri.v1) - v0;
-        let e2 = Vec3::from(tri.v2) - v0;
-        let n = Vec3::new(
-            e1.y * e2.z - e1.z * e2.y,
-            e1.z * e2.x - e1.x * e2.z,
-            e1.x * e2.y - e1.y * e2.x,
-        );
-        let n = n / (n.x * n.x + n.y * n.y + n.z * n.z).sqrt();
+    /// The packed RGBA colour of a hit with unit (shading) normal `n` at `distance` along
+    /// `dir`.
+    pub(crate) fn color(&self, n: Vec3, distance: f32, dir: Vec3) -> u32 {
         match self.shade {
             Shade::Normal => pack_rgba(0.5 * n.x + 0.5, 0.5 * n.y + 0.5, 0.5 * n.z + 0.5),
             Shade::Depth => {
