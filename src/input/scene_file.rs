@@ -340,18 +340,22 @@ impl MeshTable {
                 ));
             }
         };
-        let finite = |key: &str, v: &Option<Spanned<[f32; 3]>>, limit: f32| match v {
-            Some(v) if !v.get_ref().iter().all(|c| c.abs() <= limit) => Err(place.at(
+        // `limit` completes "each number must be finite".
+        let finite = |key: &str, v: &Option<Spanned<[f32; 3]>>, max: f32, limit: &str| match v {
+            Some(v) if !v.get_ref().iter().all(|c| c.abs() <= max) => Err(place.at(
                 v.span(),
-                format!(
-                    "{key} {:?}: each number must be finite, at most {limit:e}",
-                    v.get_ref()
-                ),
+                format!("{key} {:?}: each number must be finite{limit}", v.get_ref()),
             )),
             _ => Ok(v.as_ref().map(|v| Vec3::from(*v.get_ref()))),
         };
-        let translate = finite("translate", &self.translate, crate::mesh::MAX_COORDINATE)?;
-        let rotate = finite("rotate", &self.rotate, f32::MAX)?;
+        let max = crate::mesh::MAX_COORDINATE;
+        let translate = finite(
+            "translate",
+            &self.translate,
+            max,
+            &format!(", at most {max:e}"),
+        )?;
+        let rotate = finite("rotate", &self.rotate, f32::MAX, " (degrees)")?;
         let scale = match &self.scale {
             None => None,
             Some(s) => {
@@ -384,7 +388,14 @@ impl MeshTable {
                 // the normals would lose its precision.
                 if !det.is_normal() {
                     // Only the scale can do it: factors whose product leaves the f32 range.
-                    let span = scale.map_or(span.clone(), |s| s.1);
+                    let span = scale.as_ref().map_or(span.clone(), |s| s.1.clone());
+                    let xyz = scale.map_or(Vec3::ONE, |s| s.0).to_array();
+                    if det.is_infinite() {
+                        return Err(place.at(
+                            span,
+                            format!("scale {xyz:?}: the factors multiply to beyond the single-precision range"),
+                        ));
+                    }
                     return Err(place.at(
                         span,
                         format!("scale: the transform is singular in single precision (determinant {det:e}): give factors nearer 1"),
