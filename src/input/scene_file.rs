@@ -1,5 +1,6 @@
-//! Scene files: a small TOML format naming a mesh (a file, relative to the scene file, or a
-//! built-in generator) plus camera and render settings. Command-line flags override them.
+//! Scene files: a small TOML format naming a mesh or several (files, relative to the scene
+//! file, or built-in generators), an optional ground plane, and camera and render settings.
+//! Command-line flags override them.
 //!
 //! ```toml
 //! mesh = "room.obj"            # or a [generator] table, e.g. kind = "sphereflake"
@@ -43,6 +44,29 @@
 //!
 //! A turntable turns the camera the [camera] table, the flags and the auto framing give;
 //! a flag beats a keyframe as it beats any scene setting.
+//!
+//! Several meshes are `[[mesh]]` tables instead of `mesh` (the same key, so not both; nor
+//! with a `[generator]`), each placed in the scene ([`super::scene`] puts them together):
+//!
+//! ```toml
+//! [[mesh]]
+//! file = "room.obj"            # or generator = { kind = "sphere", subdivisions = 3 }
+//! scale = 0.5                  # or [x, y, z]; no factor 0; a negative one mirrors
+//! rotate = [0.0, 30.0, 0.0]    # degrees about x, then y, then z, each right-handed
+//! translate = [1.0, 0.0, 0.0]  # applied last: scale, rotate, translate
+//! material = { albedo = [0.8, 0.2, 0.2], emission = [0.0, 0.0, 0.0] }
+//!                              # optional: every triangle of this mesh, instead of its own
+//!
+//! [ground]                     # optional, with any form: a square facing up (+y)
+//! albedo = [0.5, 0.5, 0.5]     # the default
+//! height = 0.0                 # default: 1e-3 bounding radii under the lowest mesh
+//! size = 40.0                  # side; default 20 bounding radii of the meshes
+//! ```
+//!
+//! Triangles (the hit records' primitive indices) come mesh by mesh in file order, then
+//! the ground's two. The auto framing, the depth shading and the default `ao_distance`
+//! measure the meshes without the ground. A mirroring scale reverses each triangle's
+//! winding, so front faces stay front faces. Example: `scenes/several.toml`.
 
 use std::path::{Path, PathBuf};
 
