@@ -22,6 +22,7 @@ mod opencl_vs_cpu;
 mod parts;
 mod program_cache;
 mod run_report;
+mod scene_files;
 mod secondary;
 mod slurm;
 mod surfaces;

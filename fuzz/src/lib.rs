@@ -102,20 +102,41 @@ pub fn scene(data: &[u8]) -> cltrace::Result<SceneDescription> {
         }
     };
     let mut bounds = Aabb::from_points([Vec3::splat(-1.0), Vec3::splat(1.0)]);
-    match &scene.mesh {
-        MeshSource::File(file) => assert!(file.starts_with(base), "{}", file.display()),
-        MeshSource::Generator(g) => {
-            if let Err(e) = g.check() {
-                panic!("a parsed scene has a bad generator: {e}");
-            }
-            if g.triangle_count() <= MAX_GENERATED {
-                let mesh = g.generate().expect("a checked generator generates");
-                if let Err(e) = mesh.check(path) {
-                    panic!("{} makes a bad mesh: {e}", g.name());
+    let mut triangles = 0;
+    for placed in &scene.meshes.meshes {
+        if let Some(t) = placed.transform {
+            let det = glam::Mat3::from_mat4(t).determinant();
+            assert!(det.is_normal(), "a singular transform {t:?}");
+        }
+        match &placed.source {
+            MeshSource::File(file) => assert!(file.starts_with(base), "{}", file.display()),
+            MeshSource::Generator(g) => {
+                if let Err(e) = g.check() {
+                    panic!("a parsed scene has a bad generator: {e}");
                 }
-                assert_eq!(mesh.triangle_count() as u64, g.triangle_count());
-                bounds = mesh.bounds();
+                triangles += g.triangle_count();
             }
+        }
+    }
+    // Generators only: a file would be read from the disk.
+    let generated = scene
+        .meshes
+        .meshes
+        .iter()
+        .all(|m| matches!(m.source, MeshSource::Generator(_)));
+    if generated && triangles <= MAX_GENERATED {
+        match scene.meshes.load_with_materials() {
+            Ok(loaded) => {
+                let mesh = &loaded.file.mesh;
+                if let Err(e) = mesh.check(path) {
+                    panic!("{} makes a bad mesh: {e}", scene.meshes.name());
+                }
+                let ground = 2 * scene.meshes.ground.is_some() as u64;
+                assert_eq!(mesh.triangle_count() as u64, triangles + ground);
+                bounds = loaded.bounds;
+            }
+            // A transform may carry a generated mesh past the coordinate limit.
+            Err(e) => check_input_error(path, &e),
         }
     }
     if let Err(e) = cltrace::camera::check_settings(&scene.camera) {

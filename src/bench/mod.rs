@@ -23,6 +23,7 @@ use crate::error::{Error, Result};
 use crate::geometry::Ray;
 use crate::input::MeshFormat;
 use crate::input::generate::Generator;
+use crate::input::scene::SceneMeshes;
 use crate::input::scene_file::MeshSource;
 use crate::material::Materials;
 use crate::mesh::Mesh;
@@ -190,7 +191,7 @@ pub(crate) struct BenchRow {
 
 /// A scene to measure: its source and name.
 struct BenchScene {
-    source: MeshSource,
+    source: SceneMeshes,
     name: String,
 }
 
@@ -610,14 +611,14 @@ fn scenes(req: &BenchRequest) -> Result<Vec<BenchScene>> {
     for g in generated {
         scenes.push(BenchScene {
             name: g.name(),
-            source: MeshSource::Generator(g),
+            source: MeshSource::Generator(g).into(),
         });
     }
     for path in &req.scenes {
         let description = crate::input::scene_file::SceneDescription::named(Some(path))?;
         scenes.push(BenchScene {
-            name: description.mesh.name(),
-            source: description.mesh,
+            name: description.meshes.name(),
+            source: description.meshes,
         });
     }
     for folder in &req.scene_folders {
@@ -635,7 +636,7 @@ fn scenes(req: &BenchRequest) -> Result<Vec<BenchScene>> {
         }
         scenes.extend(found.into_iter().map(|p| BenchScene {
             name: file_name(&p),
-            source: MeshSource::File(p),
+            source: MeshSource::File(p).into(),
         }));
     }
     Ok(scenes)

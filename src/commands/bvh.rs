@@ -27,7 +27,7 @@ pub fn bvh_report(req: &BvhRequest) -> Result<String> {
     options.check()?;
     let scene = SceneDescription::named(req.scene.as_deref())?;
     let mut timings = Timings::default();
-    let mesh = timings.time("load", || scene.mesh.load())?;
+    let mesh = timings.time("load", || scene.meshes.load())?;
     // The optimization is timed apart from the build (both the best of `repeat`).
     let build_options = BuildOptions {
         optimize_rounds: 0,
@@ -72,7 +72,7 @@ pub fn bvh_report(req: &BvhRequest) -> Result<String> {
 
     let mut out = String::new();
     let mut line = |k: &str, v: String| writeln!(out, "{k:<22}{v}").expect("writing to a String");
-    line("scene", scene.mesh.name());
+    line("scene", scene.meshes.name());
     line("triangles", s.triangles.to_string());
     line(
         "builder",

@@ -377,7 +377,7 @@ fn render_with(
         let opening = method
             .uses_opencl()
             .then(|| s.spawn(|| ClDevice::select_each(&selectors)));
-        let mesh = timings.time("load", || scene.mesh.load_with_materials());
+        let mesh = timings.time("load", || scene.meshes.load_with_materials());
         // What opening the devices took beyond the load is a stage of its own.
         let devices = match opening {
             Some(handle) => {
@@ -396,12 +396,14 @@ fn render_with(
         Ok::<_, crate::Error>((devices, mesh?))
     })?;
     let device = devices.first();
+    // `bounds` are the meshes' without the ground plane: the camera frames them.
+    let crate::input::scene::LoadedScene { file, bounds } = mesh;
     let crate::input::MeshFile {
         mesh,
         materials,
         warnings,
         notes,
-    } = mesh;
+    } = file;
     for warning in warnings {
         v.say(format!("warning: {warning}"));
     }
@@ -414,12 +416,11 @@ fn render_with(
     }
     v.detail(format!(
         "mesh: {} ({} triangles, {} vertices, {} of zero area)",
-        scene.mesh.name(),
+        scene.meshes.name(),
         mesh.triangle_count(),
         mesh.positions.len(),
         mesh.degenerate_count()
     ));
-    let bounds = mesh.bounds();
     let camera_settings = match &scene.animation {
         Some(a) => a.settings_at(req.frame, &req.camera, &scene.camera, &bounds)?,
         None => camera_settings,
@@ -472,7 +473,7 @@ fn render_with(
     crate::interrupt::check()?;
     let mut summary = RunSummary {
         version: env!("CARGO_PKG_VERSION"),
-        scene: scene.mesh.name(),
+        scene: scene.meshes.name(),
         method: method.name().to_string(),
         device: device.map(|d| d.info.name.clone()),
         width: camera.width,

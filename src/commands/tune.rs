@@ -42,7 +42,7 @@ pub fn tune(req: &TuneRequest) -> Result<()> {
     }
     crate::output::check_output(path)?;
     let scene = SceneDescription::named(req.scene.as_deref())?;
-    let mesh = scene.mesh.load()?;
+    let mesh = scene.meshes.load()?;
     let all = list_devices()?;
     let chosen: Vec<_> = match &req.devices {
         None => all.clone(),
@@ -60,7 +60,7 @@ pub fn tune(req: &TuneRequest) -> Result<()> {
         verbosity.say(format!(
             "tuning {} on {}",
             device.info.name,
-            scene.mesh.name()
+            scene.meshes.name()
         ));
         let results = tune_device(&device, &mesh, req.repetitions, &mut |r| {
             print_data(&format!(
@@ -90,7 +90,7 @@ pub fn tune(req: &TuneRequest) -> Result<()> {
                 work_group: best.work_group,
                 primary_mrays: best.primary_mrays,
                 diffuse_mrays: best.diffuse_mrays,
-                scene: scene.mesh.name(),
+                scene: scene.meshes.name(),
             },
         );
     }

@@ -21,8 +21,9 @@ use super::values::{choice, parse_vec3, whole_number};
 
 #[derive(Args)]
 pub struct RenderArgs {
-    /// A scene file (.toml) or a mesh (.obj, .obj.gz, .ply, .ply.gz); the built-in default
-    /// scene when omitted. Flags override the scene file's settings.
+    /// A scene file (.toml: a mesh or several [[mesh]] tables, optionally a [ground]) or a
+    /// mesh (.obj, .obj.gz, .ply, .ply.gz); the built-in default scene when omitted. Flags
+    /// override the scene file's settings.
     scene: Option<PathBuf>,
 
     /// Output image; the format follows the extension: png, bmp, ppm, jpg (8-bit sRGB),

@@ -5,6 +5,7 @@ pub mod generate;
 mod mtl;
 mod obj;
 mod ply;
+pub mod scene;
 pub mod scene_file;
 pub mod texture;
 

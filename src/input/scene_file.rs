@@ -1,5 +1,6 @@
-//! Scene files: a small TOML format naming a mesh (a file, relative to the scene file, or a
-//! built-in generator) plus camera and render settings. Command-line flags override them.
+//! Scene files: a small TOML format naming a mesh or several (files, relative to the scene
+//! file, or built-in generators), an optional ground plane, and camera and render settings.
+//! Command-line flags override them.
 //!
 //! ```toml
 //! mesh = "room.obj"            # or a [generator] table, e.g. kind = "sphereflake"
@@ -43,9 +44,33 @@
 //!
 //! A turntable turns the camera the [camera] table, the flags and the auto framing give;
 //! a flag beats a keyframe as it beats any scene setting.
+//!
+//! Several meshes are `[[mesh]]` tables instead of `mesh` (the same key, so not both; nor
+//! with a `[generator]`), each placed in the scene ([`super::scene`] puts them together):
+//!
+//! ```toml
+//! [[mesh]]
+//! file = "room.obj"            # or generator = { kind = "sphere", subdivisions = 3 }
+//! scale = 0.5                  # or [x, y, z]; no factor 0; a negative one mirrors
+//! rotate = [0.0, 30.0, 0.0]    # degrees about x, then y, then z, each right-handed
+//! translate = [1.0, 0.0, 0.0]  # applied last: scale, rotate, translate
+//! material = { albedo = [0.8, 0.2, 0.2], emission = [0.0, 0.0, 0.0] }
+//!                              # optional: every triangle of this mesh, instead of its own
+//!
+//! [ground]                     # optional, with any form: a square facing up (+y)
+//! albedo = [0.5, 0.5, 0.5]     # the default
+//! height = 0.0                 # default: 1e-3 bounding radii under the lowest mesh
+//! size = 40.0                  # side; default 20 bounding radii of the meshes
+//! ```
+//!
+//! Triangles (the hit records' primitive indices) come mesh by mesh in file order, then
+//! the ground's two. The auto framing, the depth shading and the default `ao_distance`
+//! measure the meshes without the ground. A mirroring scale reverses each triangle's
+//! winding, so front faces stay front faces. Example: `scenes/several.toml`.
 
 use std::path::{Path, PathBuf};
 
+use glam::Vec3;
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -55,6 +80,8 @@ use crate::camera::CameraSettings;
 use crate::error::{Error, Result};
 use crate::input::generate::Generator;
 use crate::input::load_mesh;
+use crate::input::scene::{Ground, PlacedMesh, SceneMeshes};
+use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::render::integrator::Light;
 use crate::render::{Method, Shade};
@@ -170,8 +197,8 @@ impl RenderSettings {
 /// A parsed scene: the mesh to load and the settings the scene file gave.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneDescription {
-    /// Where the mesh comes from; not loaded yet.
-    pub mesh: MeshSource,
+    /// The meshes and the ground plane; not loaded yet.
+    pub meshes: SceneMeshes,
     /// The `[camera]` table, already checked as far as it can be without the mesh; the
     /// command line's settings override it.
     pub camera: CameraSettings,
@@ -183,12 +210,299 @@ pub struct SceneDescription {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct SceneFile {
-    mesh: Option<PathBuf>,
-    generator: Option<Generator>,
+    // Spanned, so that errors about them name their lines.
+    mesh: Option<Spanned<MeshKey>>,
+    generator: Option<Spanned<Generator>>,
+    ground: Option<GroundTable>,
     #[serde(default)]
     camera: CameraTable,
     #[serde(default)]
     render: RenderSettings,
+}
+
+/// The `mesh` key: one file name, or the `[[mesh]]` tables. (TOML itself refuses both in
+/// one file: they are the same key.)
+enum MeshKey {
+    One(PathBuf),
+    Several(Vec<Spanned<MeshTable>>),
+}
+
+impl<'de> Deserialize<'de> for MeshKey {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct Visit;
+        impl<'de> serde::de::Visitor<'de> for Visit {
+            type Value = MeshKey;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a mesh file name or [[mesh]] tables")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> std::result::Result<MeshKey, E> {
+                Ok(MeshKey::One(PathBuf::from(v)))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> std::result::Result<MeshKey, A::Error> {
+                let mut tables = Vec::new();
+                while let Some(table) = seq.next_element()? {
+                    tables.push(table);
+                }
+                Ok(MeshKey::Several(tables))
+            }
+        }
+        d.deserialize_any(Visit)
+    }
+}
+
+/// A `[[mesh]]` table: one mesh and how it is placed.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MeshTable {
+    file: Option<PathBuf>,
+    generator: Option<Generator>,
+    translate: Option<Spanned<[f32; 3]>>,
+    rotate: Option<Spanned<[f32; 3]>>,
+    scale: Option<Spanned<Scale>>,
+    material: Option<Spanned<MaterialTable>>,
+}
+
+/// A `scale`: one number for every axis, or one per axis.
+struct Scale([f32; 3]);
+
+impl<'de> Deserialize<'de> for Scale {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct Visit;
+        impl<'de> serde::de::Visitor<'de> for Visit {
+            type Value = Scale;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number or three numbers [x, y, z]")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> std::result::Result<Scale, E> {
+                Ok(Scale([v as f32; 3]))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> std::result::Result<Scale, E> {
+                Ok(Scale([v as f32; 3]))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> std::result::Result<Scale, E> {
+                Ok(Scale([v as f32; 3]))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> std::result::Result<Scale, A::Error> {
+                let mut xyz = Vec::new();
+                while let Some(v) = seq.next_element::<f32>()? {
+                    xyz.push(v);
+                }
+                let xyz: [f32; 3] = xyz.try_into().map_err(|v: Vec<f32>| {
+                    serde::de::Error::invalid_length(v.len(), &"three numbers [x, y, z]")
+                })?;
+                Ok(Scale(xyz))
+            }
+        }
+        d.deserialize_any(Visit)
+    }
+}
+
+/// A `[[mesh]]` table's `material`: every triangle of that mesh gets it.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MaterialTable {
+    albedo: Option<[f32; 3]>,
+    emission: Option<[f32; 3]>,
+}
+
+/// The `[ground]` table; every key optional.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GroundTable {
+    albedo: Option<Spanned<[f32; 3]>>,
+    height: Option<Spanned<f32>>,
+    size: Option<Spanned<f32>>,
+}
+
+/// Where a scene file's errors point: the file, and its text to find lines in.
+struct Place<'a> {
+    text: &'a str,
+    path: &'a Path,
+}
+
+impl Place<'_> {
+    fn at(&self, span: std::ops::Range<usize>, message: impl Into<String>) -> Error {
+        Error::input_at(self.path, line_of(self.text, span.start), message)
+    }
+}
+
+/// An albedo's problem, if it has one: each channel in [0, 1].
+fn albedo_problem(key: &str, albedo: [f32; 3]) -> Option<String> {
+    (!albedo.iter().all(|c| (0.0..=1.0).contains(c)))
+        .then(|| format!("{key} {albedo:?}: each channel must be in [0, 1]"))
+}
+
+impl MeshTable {
+    /// The mesh it places, checked; `span` is the table's.
+    fn placed(
+        self,
+        span: std::ops::Range<usize>,
+        base: &Path,
+        place: &Place,
+    ) -> Result<PlacedMesh> {
+        let line = line_of(place.text, span.start);
+        let source = match (self.file, self.generator) {
+            (Some(file), None) => MeshSource::File(base.join(file)),
+            (None, Some(generator)) => {
+                generator
+                    .check()
+                    .map_err(|e| Error::input_at(place.path, line, e.to_string()))?;
+                MeshSource::Generator(generator)
+            }
+            (Some(_), Some(_)) => {
+                return Err(place.at(
+                    span,
+                    "a [[mesh]] gives either `file` or `generator`, not both",
+                ));
+            }
+            (None, None) => {
+                return Err(place.at(
+                    span,
+                    "a [[mesh]] needs `file = \"name.obj\"` or `generator = { kind = ... }`",
+                ));
+            }
+        };
+        // `limit` completes "each number must be finite".
+        let finite = |key: &str, v: &Option<Spanned<[f32; 3]>>, max: f32, limit: &str| match v {
+            Some(v) if !v.get_ref().iter().all(|c| c.abs() <= max) => Err(place.at(
+                v.span(),
+                format!("{key} {:?}: each number must be finite{limit}", v.get_ref()),
+            )),
+            _ => Ok(v.as_ref().map(|v| Vec3::from(*v.get_ref()))),
+        };
+        let max = crate::mesh::MAX_COORDINATE;
+        let translate = finite(
+            "translate",
+            &self.translate,
+            max,
+            &format!(", at most {max:e}"),
+        )?;
+        let rotate = finite("rotate", &self.rotate, f32::MAX, " (degrees)")?;
+        let scale = match &self.scale {
+            None => None,
+            Some(s) => {
+                let xyz = s.get_ref().0;
+                if !xyz.iter().all(|c| c.is_finite()) {
+                    return Err(place.at(
+                        s.span(),
+                        format!("scale {xyz:?}: each number must be finite"),
+                    ));
+                }
+                if xyz.contains(&0.0) {
+                    return Err(place.at(
+                        s.span(),
+                        format!("scale {xyz:?} flattens the mesh (a singular transform): no factor may be 0"),
+                    ));
+                }
+                Some((Vec3::from(xyz), s.span()))
+            }
+        };
+        let transform = match (translate, rotate, &scale) {
+            (None, None, None) => None,
+            _ => {
+                let matrix = super::scene::transform(
+                    translate.unwrap_or(Vec3::ZERO),
+                    rotate.unwrap_or(Vec3::ZERO),
+                    scale.as_ref().map_or(Vec3::ONE, |s| s.0),
+                );
+                let det = glam::Mat3::from_mat4(matrix).determinant();
+                // A subnormal determinant counts as zero: the inverse transpose that turns
+                // the normals would lose its precision.
+                if !det.is_normal() {
+                    // Only the scale can do it: factors whose product leaves the f32 range.
+                    let span = scale.as_ref().map_or(span.clone(), |s| s.1.clone());
+                    let xyz = scale.map_or(Vec3::ONE, |s| s.0).to_array();
+                    if det.is_infinite() {
+                        return Err(place.at(
+                            span,
+                            format!("scale {xyz:?}: the factors multiply to beyond the single-precision range"),
+                        ));
+                    }
+                    return Err(place.at(
+                        span,
+                        format!("scale: the transform is singular in single precision (determinant {det:e}): give factors nearer 1"),
+                    ));
+                }
+                Some(matrix)
+            }
+        };
+        let material = match self.material {
+            None => None,
+            Some(m) => {
+                let span = m.span();
+                let m = m.into_inner();
+                let albedo = m.albedo.unwrap_or(crate::material::DEFAULT_ALBEDO);
+                let emission = m.emission.unwrap_or([0.0; 3]);
+                if let Some(problem) = albedo_problem("material albedo", albedo) {
+                    return Err(place.at(span, problem));
+                }
+                if !emission.iter().all(|c| c.is_finite() && *c >= 0.0) {
+                    return Err(place.at(
+                        span,
+                        format!("material emission {emission:?}: each channel must be finite and 0 or more"),
+                    ));
+                }
+                Some(Material::emitting(albedo, emission))
+            }
+        };
+        Ok(PlacedMesh {
+            source,
+            transform,
+            material,
+            line: Some(line),
+        })
+    }
+}
+
+impl GroundTable {
+    fn ground(self, place: &Place) -> Result<Ground> {
+        let albedo = match self.albedo {
+            None => Ground::ALBEDO,
+            Some(a) => {
+                if let Some(problem) = albedo_problem("albedo", *a.get_ref()) {
+                    return Err(place.at(a.span(), problem));
+                }
+                a.into_inner()
+            }
+        };
+        let height = match self.height {
+            Some(h) if !(0.0..=crate::mesh::MAX_COORDINATE).contains(&h.get_ref().abs()) => {
+                return Err(place.at(
+                    h.span(),
+                    format!(
+                        "height {}: must be finite, at most {:e}",
+                        h.get_ref(),
+                        crate::mesh::MAX_COORDINATE
+                    ),
+                ));
+            }
+            h => h.map(Spanned::into_inner),
+        };
+        let size = match self.size {
+            Some(s) if !(f32::MIN_POSITIVE..=crate::mesh::MAX_COORDINATE).contains(s.get_ref()) => {
+                return Err(place.at(
+                    s.span(),
+                    format!(
+                        "size {}: must be more than 0, at most {:e}",
+                        s.get_ref(),
+                        crate::mesh::MAX_COORDINATE
+                    ),
+                ));
+            }
+            s => s.map(Spanned::into_inner),
+        };
+        Ok(Ground {
+            albedo,
+            height,
+            size,
+        })
+    }
 }
 
 /// The `[camera]` table: [`CameraSettings`]' keys (listed again, as serde's `flatten` would
@@ -286,7 +600,11 @@ impl SceneDescription {
     /// A scene that is just a mesh file, with every setting left to defaults and flags.
     pub(crate) fn from_mesh(path: &Path) -> Self {
         SceneDescription {
-            mesh: MeshSource::File(path.to_path_buf()),
+            meshes: SceneMeshes {
+                meshes: vec![PlacedMesh::plain(MeshSource::File(path.to_path_buf()))],
+                ground: None,
+                scene: path.to_path_buf(),
+            },
             camera: CameraSettings::default(),
             animation: None,
             render: RenderSettings::default(),
@@ -298,40 +616,93 @@ impl SceneDescription {
         let file: SceneFile = toml::from_str(text).map_err(|e| {
             let message = crate::input::clean_line(e.message().trim());
             match e.span() {
-                Some(span) => Error::input_at(path, line_of(text, span.start), message),
+                Some(span) => {
+                    let line = line_of(text, span.start);
+                    let message = match message.as_str() {
+                        // toml says no more; the line says which key.
+                        "duplicate key" => duplicate_key(text.lines().nth(line - 1)),
+                        _ => message,
+                    };
+                    Error::input_at(path, line, message)
+                }
                 None => Error::input(path, message),
             }
         })?;
         // What can be checked without the mesh is checked here, so that the error names
         // the scene file.
-        let in_scene = |e: Error| Error::input(path, e.to_string());
         let (camera, animation) = file.camera.split(text, path)?;
-        crate::camera::check_settings(&camera).map_err(in_scene)?;
-        let mesh = match (file.mesh, file.generator) {
-            (Some(mesh), None) => MeshSource::File(base.join(mesh)),
-            (None, Some(generator)) => {
-                generator.check().map_err(in_scene)?;
-                MeshSource::Generator(generator)
+        crate::camera::check_settings(&camera).map_err(|e| Error::input(path, e.to_string()))?;
+        let place = Place { text, path };
+        let meshes = match (file.mesh, file.generator) {
+            (Some(mesh), None) => {
+                let span = mesh.span();
+                match mesh.into_inner() {
+                    MeshKey::One(file) => {
+                        vec![PlacedMesh::plain(MeshSource::File(base.join(file)))]
+                    }
+                    MeshKey::Several(tables) if tables.is_empty() => {
+                        return Err(place.at(
+                            span,
+                            "`mesh` lists no meshes: give at least one [[mesh]] table",
+                        ));
+                    }
+                    MeshKey::Several(tables) => tables
+                        .into_iter()
+                        .map(|t| {
+                            let span = t.span();
+                            t.into_inner().placed(span, base, &place)
+                        })
+                        .collect::<Result<_>>()?,
+                }
             }
-            (Some(_), Some(_)) => {
-                return Err(Error::input(
-                    path,
-                    "give either `mesh` or a [generator] table, not both",
+            (None, Some(generator)) => {
+                let span = generator.span();
+                let generator = generator.into_inner();
+                generator
+                    .check()
+                    .map_err(|e| place.at(span, e.to_string()))?;
+                vec![PlacedMesh::plain(MeshSource::Generator(generator))]
+            }
+            (Some(_), Some(generator)) => {
+                return Err(place.at(
+                    generator.span(),
+                    "give either `mesh` (or [[mesh]] tables) or a [generator] table, not both",
                 ));
             }
             (None, None) => {
                 return Err(Error::input(
                     path,
-                    "no mesh: give `mesh = \"file.obj\"` or a [generator] table",
+                    "no mesh: give `mesh = \"file.obj\"`, [[mesh]] tables or a [generator] table",
                 ));
             }
         };
+        let ground = file.ground.map(|g| g.ground(&place)).transpose()?;
         Ok(SceneDescription {
-            mesh,
+            meshes: SceneMeshes {
+                meshes,
+                ground,
+                scene: path.to_path_buf(),
+            },
             camera,
             animation,
             render: file.render,
         })
+    }
+}
+
+/// The message for a key given twice, at `line`: the two forms of `mesh` get their own.
+fn duplicate_key(line: Option<&str>) -> String {
+    let line = line.unwrap_or("").trim();
+    let is_mesh = line.starts_with("[[mesh]]")
+        || line
+            .strip_prefix("mesh")
+            .is_some_and(|rest| rest.trim_start().starts_with('='));
+    match is_mesh {
+        true => "give either `mesh = \"file.obj\"` or [[mesh]] tables, not both".into(),
+        false => format!(
+            "duplicate key: {} gives a key again",
+            crate::input::quoted(line)
+        ),
     }
 }
 
@@ -350,16 +721,151 @@ mod tests {
         SceneDescription::parse(text, Path::new("s.toml"), Path::new("dir"))
     }
 
+    /// The scene's one mesh, as placed by the one-mesh forms: as it is.
+    fn one(s: &SceneDescription) -> &MeshSource {
+        assert_eq!(s.meshes.meshes.len(), 1);
+        assert_eq!(s.meshes.ground, None);
+        let placed = &s.meshes.meshes[0];
+        assert_eq!((placed.transform, placed.material), (None, None));
+        &placed.source
+    }
+
+    const SEVERAL: &str = "\
+[[mesh]]
+file = \"a.obj\"
+translate = [1, 2, 3]
+
+[[mesh]]
+generator = { kind = \"cube\" }
+rotate = [0, 90, 0]
+scale = 2
+material = { albedo = [0.8, 0.2, 0.2] }
+
+[[mesh]]
+file = \"b.ply\"
+scale = [-1, 1, 1]
+material = { emission = [4, 4, 4] }
+
+[ground]
+albedo = [0.1, 0.2, 0.3]
+";
+
+    #[test]
+    fn several_meshes_parse_in_order() {
+        let s = parse(SEVERAL).unwrap();
+        let m = &s.meshes.meshes;
+        assert_eq!(m.len(), 3);
+        assert_eq!(m[0].source, MeshSource::File(PathBuf::from("dir/a.obj")));
+        assert_eq!(m[1].source, MeshSource::Generator(Generator::Cube {}));
+        assert_eq!(m[2].source, MeshSource::File(PathBuf::from("dir/b.ply")));
+        let moved = m[0].transform.unwrap().transform_point3(Vec3::ZERO);
+        assert_eq!(moved, Vec3::new(1.0, 2.0, 3.0));
+        // Scaled by 2, then x turned onto -z.
+        let turned = m[1].transform.unwrap().transform_point3(Vec3::X);
+        assert_eq!(turned, Vec3::new(0.0, 0.0, -2.0));
+        assert_eq!(m[1].material.unwrap().albedo, [0.8, 0.2, 0.2]);
+        assert_eq!(m[1].material.unwrap().emission, [0.0; 3]);
+        assert_eq!(
+            m[2].material.unwrap().albedo,
+            crate::material::DEFAULT_ALBEDO
+        );
+        assert!(m[2].material.unwrap().emits());
+        assert_eq!(
+            [m[0].line, m[1].line, m[2].line],
+            [Some(1), Some(5), Some(11)]
+        );
+        let ground = s.meshes.ground.unwrap();
+        assert_eq!(ground.albedo, [0.1, 0.2, 0.3]);
+        assert_eq!((ground.height, ground.size), (None, None));
+        assert_eq!(s.meshes.name(), "a.obj + cube + b.ply + ground");
+    }
+
+    #[test]
+    fn a_ground_goes_with_every_form() {
+        let s = parse("mesh = \"a.obj\"\n[ground]\nheight = -1\nsize = 50\n").unwrap();
+        let ground = s.meshes.ground.unwrap();
+        assert_eq!((ground.height, ground.size), (Some(-1.0), Some(50.0)));
+        assert_eq!(ground.albedo, Ground::ALBEDO);
+        assert!(
+            parse("[generator]\nkind = \"cube\"\n[ground]\n")
+                .unwrap()
+                .meshes
+                .ground
+                .is_some()
+        );
+    }
+
+    #[test]
+    fn bad_placements_are_errors_at_their_line() {
+        let mesh = "[[mesh]]\nfile = \"a.obj\"\n";
+        for (text, line, words) in [
+            (format!("{mesh}scale = 0\n"), 3, "singular"),
+            (format!("{mesh}scale = [1, 0, 1]\n"), 3, "singular"),
+            (format!("{mesh}scale = [1e-20, 1e-20, 1]\n"), 3, "singular"),
+            (format!("{mesh}scale = nan\n"), 3, "finite"),
+            (format!("{mesh}scale = [1, 2]\n"), 3, "three numbers"),
+            (format!("{mesh}scale = \"big\"\n"), 3, "a number"),
+            (format!("{mesh}translate = [0, inf, 0]\n"), 3, "translate"),
+            (format!("{mesh}rotate = [nan, 0, 0]\n"), 3, "rotate"),
+            (format!("{mesh}turn = 3\n"), 3, "turn"),
+            (
+                format!("{mesh}material = {{ albedo = [2, 0, 0] }}\n"),
+                3,
+                "albedo",
+            ),
+            (
+                format!("{mesh}material = {{ emission = [-1, 0, 0] }}\n"),
+                3,
+                "emission",
+            ),
+            (format!("{mesh}material = {{ shine = 1 }}\n"), 3, "shine"),
+            (format!("mesh = \"a.obj\"\n{mesh}"), 2, "not both"),
+            (
+                format!("{mesh}mesh = \"a.obj\"\n"),
+                3,
+                "unknown field `mesh`",
+            ),
+            (format!("{mesh}scale = 1\nscale = 2\n"), 4, "`scale = 2`"),
+            (
+                format!("{mesh}[generator]\nkind = \"cube\"\n"),
+                3,
+                "not both",
+            ),
+            (
+                format!("{mesh}generator = {{ kind = \"cube\" }}\n"),
+                1,
+                "not both",
+            ),
+            ("[[mesh]]\nscale = 2\n".to_string(), 1, "file"),
+            ("mesh = []\n".to_string(), 1, "no meshes"),
+            ("mesh = 3\n".to_string(), 1, "mesh file name"),
+            (
+                "[[mesh]]\ngenerator = { kind = \"soup\", triangles = 0 }\n".to_string(),
+                1,
+                "soup",
+            ),
+            (format!("{mesh}[ground]\nalbedo = [0, 0, 9]\n"), 4, "albedo"),
+            (format!("{mesh}[ground]\nsize = 0\n"), 4, "size"),
+            (format!("{mesh}[ground]\nheight = nan\n"), 4, "height"),
+            (format!("{mesh}[ground]\ncolour = 1\n"), 4, "colour"),
+        ] {
+            let msg = parse(&text).unwrap_err().to_string();
+            assert!(msg.starts_with(&format!("s.toml:{line}:")), "{text}\n{msg}");
+            assert!(msg.contains(words), "{text}\n{msg}");
+            assert!(!msg.contains('\n'), "{msg}");
+        }
+    }
+
     #[test]
     fn builtin_default_parses() {
         let s = SceneDescription::builtin_default();
-        assert!(matches!(s.mesh, MeshSource::Generator(_)));
+        assert!(matches!(one(&s), MeshSource::Generator(_)));
     }
 
     #[test]
     fn mesh_path_is_relative_to_the_scene() {
         let s = parse("mesh = \"a/b.obj\"\n[camera]\nfov = 30\n").unwrap();
-        assert_eq!(s.mesh, MeshSource::File(PathBuf::from("dir/a/b.obj")));
+        assert_eq!(one(&s), &MeshSource::File(PathBuf::from("dir/a/b.obj")));
         assert_eq!(s.camera.fov, Some(30.0));
     }
 
@@ -367,8 +873,8 @@ mod tests {
     fn generator_with_parameters() {
         let s = parse("[generator]\nkind = \"soup\"\ntriangles = 10\nseed = 3\n").unwrap();
         assert_eq!(
-            s.mesh,
-            MeshSource::Generator(Generator::Soup {
+            one(&s),
+            &MeshSource::Generator(Generator::Soup {
                 triangles: 10,
                 seed: 3
             })
