@@ -101,6 +101,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8], read_materials: bool) -> Result<M
         materials,
         warnings,
         notes: unused.note(path).into_iter().collect(),
+        camera: None,
     })
 }
 

@@ -134,6 +134,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<MeshFile> {
         materials: Materials::default(),
         warnings: polygons.warnings(path),
         notes: unused_note(path, &unused).into_iter().collect(),
+        camera: None,
     })
 }
 

@@ -94,6 +94,7 @@ impl MeshSource {
                     materials,
                     warnings: Vec::new(),
                     notes: Vec::new(),
+                    camera: None,
                 })
             }
         }
