@@ -43,9 +43,10 @@ pub(super) fn parse(
     folder: Option<&Path>,
     read_materials: bool,
 ) -> Result<MeshFile> {
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| describe(path, e))?;
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| describe(path, e))?;
     let blob = gltf.blob.clone();
     let root = gltf.document.into_json();
+    validate(path, &root)?;
     let mut file = Reader {
         path,
         folder,
@@ -56,6 +57,29 @@ pub(super) fn parse(
         notes: Vec::new(),
     };
     file.read(read_materials)
+}
+
+/// The crate's validation (every index in range, enumerations known, required extensions
+/// read), which everything after relies on, less one rule: an accessor for POSITION
+/// without `min` and `max` (which cltrace does not need, and some exporters leave out).
+fn validate(path: &Path, root: &json::Root) -> Result<()> {
+    use json::validation::{Error as Invalid, Validate};
+    let mut errors = Vec::new();
+    root.validate(
+        root,
+        json::Path::new,
+        &mut |at: &dyn Fn() -> json::Path, e| {
+            let at = at();
+            let bound = at.as_str().ends_with(".min") || at.as_str().ends_with(".max");
+            if !(bound && e == Invalid::Missing) {
+                errors.push((at, e));
+            }
+        },
+    );
+    match errors.is_empty() {
+        true => Ok(()),
+        false => Err(describe(path, gltf::Error::Validation(errors))),
+    }
 }
 
 /// One line for the crate's error: what failed to parse, or the first invalid item.
