@@ -64,6 +64,25 @@ pub(super) fn parse(
 /// without `min` and `max` (which cltrace does not need, and some exporters leave out).
 fn validate(path: &Path, root: &json::Root) -> Result<()> {
     use json::validation::{Error as Invalid, Validate};
+    // The crate's check of a primitive's POSITION bounds indexes the accessors unchecked
+    // (gltf-json 1.4.1 panics on a POSITION index out of range): check it first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = primitive
+                .attributes
+                .get(&Checked::Valid(Semantic::Positions));
+            if let Some(a) = position.filter(|a| a.value() >= root.accessors.len()) {
+                return Err(Error::input(
+                    path,
+                    format!(
+                        "invalid glTF: meshes[{m}].primitives[{p}].attributes[\"POSITION\"] \
+                         = {}: Index out of bounds",
+                        a.value()
+                    ),
+                ));
+            }
+        }
+    }
     let mut errors = Vec::new();
     root.validate(
         root,
