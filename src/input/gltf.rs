@@ -198,6 +198,11 @@ impl Reader<'_> {
             ));
         }
         self.unused_notes();
+        if mesh.triangles.is_empty() && skipped_modes > 0 {
+            return Err(self.err(format!(
+                "the mesh has no triangles, only {skipped_modes} point or line primitives"
+            )));
+        }
         mesh.check(self.path)?;
         let materials = match read_materials {
             true => {
