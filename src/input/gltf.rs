@@ -608,8 +608,6 @@ impl Reader<'_> {
                 out.push(read(&view_bytes[at..at + size])?);
             }
         }
-        // Positions and attributes are checked for NaN by `Mesh::check`; here only that
-        // none is infinite through a huge u32 (impossible) is left.
         Ok(out)
     }
 
@@ -707,7 +705,7 @@ impl Reader<'_> {
         let root = self.root;
         let mut out = Materials::default();
         let mut cache: HashMap<(usize, bool, [u32; 2]), i32> = HashMap::new();
-        let mut missing: HashMap<usize, ()> = HashMap::new();
+        let mut missing = std::collections::HashSet::new();
         let mut blended = 0usize;
         let mut transformed = false;
         let mut occlusion_strength = false;
@@ -835,7 +833,7 @@ impl Reader<'_> {
         srgb: bool,
         out: &mut Materials,
         cache: &mut HashMap<(usize, bool, [u32; 2]), i32>,
-        missing: &mut HashMap<usize, ()>,
+        missing: &mut std::collections::HashSet<usize>,
     ) -> Result<i32> {
         let root = self.root;
         let t = &root.textures[index];
@@ -850,7 +848,7 @@ impl Reader<'_> {
         if let Some(&slot) = cache.get(&(image, srgb, wrap.map(Wrap::code))) {
             return Ok(slot);
         }
-        if missing.contains_key(&image) {
+        if missing.contains(&image) {
             return Ok(NO_TEXTURE);
         }
         let img = &root.images[image];
@@ -868,7 +866,7 @@ impl Reader<'_> {
                             "{}: {why}; the textures it holds are left out",
                             self.path.display()
                         ));
-                        missing.insert(image, ());
+                        missing.insert(image);
                         return Ok(NO_TEXTURE);
                     }
                 }
