@@ -110,6 +110,45 @@ fn mtl_regression_inputs_read_without_a_panic() {
 }
 
 #[test]
+fn gltf_regression_inputs_load_or_fail_cleanly() {
+    run_all("gltf", |_, bytes| {
+        let _ = fuzz_cases::gltf(bytes);
+    });
+}
+
+#[test]
+fn texture_regression_inputs_decode_or_fail_cleanly() {
+    run_all("texture", |_, bytes| {
+        let _ = fuzz_cases::texture(bytes);
+    });
+}
+
+/// The glTF and texture seeds are good files: each loads through its fuzz target's body.
+#[test]
+fn gltf_and_texture_seeds_load() {
+    let seeds = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fuzz/seeds");
+    for (target, body) in [
+        (
+            "gltf",
+            (|b: &[u8]| fuzz_cases::gltf(b).map(drop)) as fn(&[u8]) -> _,
+        ),
+        ("texture", |b: &[u8]| fuzz_cases::texture(b).map(drop)),
+    ] {
+        let files = std::fs::read_dir(seeds.join(target)).unwrap();
+        let mut n = 0;
+        for file in files {
+            let path = file.unwrap().path();
+            let bytes = std::fs::read(&path).unwrap();
+            if let Err(e) = body(&bytes) {
+                panic!("seed {} fails: {e}", path.display());
+            }
+            n += 1;
+        }
+        assert!(n > 0, "fuzz/seeds/{target} holds no seeds");
+    }
+}
+
+#[test]
 fn there_are_regression_inputs() {
     let total: usize = ["obj", "ply", "scene", "bvh", "bvh_raw", "mtl"]
         .iter()

@@ -12,6 +12,7 @@ mod commands;
 mod concurrency;
 mod frames;
 mod fuzz_regressions;
+mod gltf;
 mod interrupt;
 mod layout;
 mod limits;

@@ -532,3 +532,68 @@ pub fn bvh_raw(data: &[u8]) -> usize {
     }
     hits
 }
+
+/// Target `gltf`: the bytes as a glTF file (a `.glb` when they start with its magic), with
+/// its materials and the textures in data URIs or the binary chunk. A file that loads must
+/// pass the mesh check, give every triangle a material and every texture slot a texture.
+pub fn gltf(data: &[u8]) -> cltrace::Result<cltrace::input::MeshFile> {
+    let path = Path::new("fuzz.gltf");
+    let result = cltrace::input::parse_gltf_bytes(path, data);
+    match &result {
+        Ok(file) => {
+            if let Err(e) = file.mesh.check(path) {
+                panic!("a loaded mesh fails its check: {e}");
+            }
+            let m = &file.materials;
+            assert!(
+                m.per_triangle.is_empty() || m.per_triangle.len() == file.mesh.triangle_count(),
+                "{} material indices for {} triangles",
+                m.per_triangle.len(),
+                file.mesh.triangle_count()
+            );
+            assert!(m.per_triangle.iter().all(|&i| (i as usize) < m.list.len()));
+            for material in &m.list {
+                let slots = [
+                    material.base_texture,
+                    material.emission_texture,
+                    material.metallic_roughness_texture,
+                    material.normal_texture,
+                    material.alpha_texture,
+                    material.occlusion_texture,
+                ];
+                for slot in slots {
+                    assert!(
+                        slot == cltrace::material::NO_TEXTURE
+                            || (0..m.textures.len() as i32).contains(&slot),
+                        "texture slot {slot} of {} textures",
+                        m.textures.len()
+                    );
+                }
+                assert!(material.albedo.iter().all(|c| (0.0..=1.0).contains(c)));
+                assert!(material.emission.iter().all(|e| e.is_finite() && *e >= 0.0));
+            }
+            if let Some(c) = &file.camera {
+                let fov = c.fov.expect("a file's camera has a field of view");
+                assert!(fov > 0.0 && fov < 180.0, "fov {fov}");
+            }
+        }
+        Err(e) => check_input_error(path, e),
+    }
+    result
+}
+
+/// Target `texture`: the bytes as an image file decoded to a texture. One that decodes has
+/// `width * height` finite texels; an error is clean.
+pub fn texture(data: &[u8]) -> cltrace::Result<cltrace::material::Texture> {
+    use cltrace::input::texture::{ColorSpace, decode_texture};
+    let path = Path::new("fuzz.png");
+    let result = decode_texture(path, data, ColorSpace::Srgb, [Default::default(); 2]);
+    match &result {
+        Ok(t) => {
+            assert_eq!(t.texels.len(), t.width as usize * t.height as usize);
+            assert!(t.texels.iter().flatten().all(|v| v.is_finite()));
+        }
+        Err(e) => check_input_error(path, e),
+    }
+    result
+}

@@ -631,7 +631,7 @@ fn scenes(req: &BenchRequest) -> Result<Vec<BenchScene>> {
         if found.is_empty() {
             return Err(Error::input(
                 folder,
-                "holds no .obj, .obj.gz, .ply or .ply.gz mesh",
+                "holds no .obj, .obj.gz, .ply, .ply.gz, .gltf or .glb mesh",
             ));
         }
         scenes.extend(found.into_iter().map(|p| BenchScene {

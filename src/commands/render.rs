@@ -403,6 +403,7 @@ fn render_with(
         materials,
         warnings,
         notes,
+        camera: file_camera,
     } = file;
     for warning in warnings {
         v.say(format!("warning: {warning}"));
@@ -423,7 +424,7 @@ fn render_with(
     ));
     let camera_settings = match &scene.animation {
         Some(a) => a.settings_at(req.frame, &req.camera, &scene.camera, &bounds)?,
-        None => camera_settings,
+        None => with_file_camera(camera_settings, file_camera, v),
     };
     let camera = Camera::from_settings(&camera_settings, &bounds)?;
     v.detail(format!(
@@ -819,6 +820,31 @@ fn devices_named(devices: &[ClDevice]) -> Option<String> {
 
 fn elapsed_ms(start: std::time::Instant) -> f64 {
     start.elapsed().as_secs_f64() * 1e3
+}
+
+/// The camera the mesh file gives (a glTF file's) in place of the auto framing, when
+/// neither the flags nor the scene file place the camera (any of eye, look-at, up, fov);
+/// the image size stays the flags' and the scene's.
+fn with_file_camera(
+    settings: CameraSettings,
+    file: Option<CameraSettings>,
+    v: Verbosity,
+) -> CameraSettings {
+    let placed = settings.eye.is_some()
+        || settings.look_at.is_some()
+        || settings.up.is_some()
+        || settings.fov.is_some();
+    match file {
+        Some(file) if !placed => {
+            v.detail("camera: the mesh file's own");
+            CameraSettings {
+                width: settings.width,
+                height: settings.height,
+                ..file
+            }
+        }
+        _ => settings,
+    }
 }
 
 /// A warning when the image shows nothing: every camera ray missed, or (in the modes that

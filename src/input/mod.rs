@@ -1,7 +1,8 @@
-//! Scene input: meshes from Wavefront OBJ and Stanford PLY files (optionally gzip-compressed)
-//! and from the built-in generators, and the TOML scene files that name them.
+//! Scene input: meshes from Wavefront OBJ and Stanford PLY files (optionally gzip-compressed),
+//! glTF 2.0 files and the built-in generators, and the TOML scene files that name them.
 
 pub mod generate;
+mod gltf;
 mod mtl;
 mod obj;
 mod ply;
@@ -27,11 +28,16 @@ pub enum MeshFormat {
     Obj,
     /// Stanford PLY (`.ply`): ASCII or binary, geometry only.
     Ply,
+    /// glTF 2.0 JSON (`.gltf`), with its buffers and images in files beside it or in data
+    /// URIs.
+    Gltf,
+    /// Binary glTF 2.0 (`.glb`).
+    Glb,
 }
 
 impl MeshFormat {
     /// The format and whether the file is gzip-compressed, from its name:
-    /// `.obj`, `.obj.gz`, `.ply`, `.ply.gz` (case-insensitive).
+    /// `.obj`, `.obj.gz`, `.ply`, `.ply.gz`, `.gltf`, `.glb` (case-insensitive).
     pub fn from_path(path: &Path) -> Option<(MeshFormat, bool)> {
         let name = path.file_name()?.to_string_lossy().to_ascii_lowercase();
         let (stem, gzip) = match name.strip_suffix(".gz") {
@@ -42,6 +48,10 @@ impl MeshFormat {
             MeshFormat::Obj
         } else if stem.ends_with(".ply") {
             MeshFormat::Ply
+        } else if stem.ends_with(".gltf") && !gzip {
+            MeshFormat::Gltf
+        } else if stem.ends_with(".glb") && !gzip {
+            MeshFormat::Glb
         } else {
             return None;
         };
@@ -49,7 +59,7 @@ impl MeshFormat {
     }
 }
 
-/// Reads a mesh file: OBJ or PLY, plain or gzip-compressed. Every failure is an
+/// Reads a mesh file: OBJ or PLY, plain or gzip-compressed, or glTF. Every failure is an
 /// [`Error::Input`] naming the file, and the line where the parser knows it.
 pub fn load_mesh(path: &Path) -> Result<Mesh> {
     Ok(read_mesh(path, false)?.mesh)
@@ -59,7 +69,8 @@ pub fn load_mesh(path: &Path) -> Result<Mesh> {
 pub struct MeshFile {
     /// The triangles in file order, checked by [`Mesh::check`].
     pub mesh: Mesh,
-    /// An OBJ's materials from its MTL files (`Kd`, `Ke`); grey for PLY.
+    /// An OBJ's materials from its MTL files (`Kd`, `Ke`), a glTF file's PBR materials and
+    /// textures; grey for PLY.
     pub materials: Materials,
     /// What the file holds that is wrong but no reason to refuse it, each a line to warn
     /// with: why the materials are grey although the file names some (a missing or broken
@@ -68,6 +79,9 @@ pub struct MeshFile {
     /// What the verbose output says about the file besides its size: the vertex
     /// attributes read, what was read past (unsupported glTF parts), each a line.
     pub notes: Vec<String>,
+    /// The file's own camera (a glTF file's first perspective camera): the default when
+    /// neither the flags nor the scene file place the camera.
+    pub camera: Option<crate::camera::CameraSettings>,
 }
 
 /// Reads a mesh file with its materials, as [`load_mesh`] does plus the OBJ's MTL files.
@@ -83,23 +97,36 @@ fn read_mesh(path: &Path, read_materials: bool) -> Result<MeshFile> {
     let (format, gzip) = MeshFormat::from_path(path).ok_or_else(|| {
         Error::input(
             path,
-            "unknown mesh format: expected a .obj, .obj.gz, .ply or .ply.gz file",
+            "unknown mesh format: expected a .obj, .obj.gz, .ply, .ply.gz, .gltf or .glb file",
         )
     })?;
     let bytes = read_file(path)?;
-    parse(path, format, gzip, &bytes, read_materials)
+    // A glTF file's URIs are relative to its folder.
+    let folder = path.parent().unwrap_or(Path::new("."));
+    parse(path, format, gzip, &bytes, read_materials, Some(folder))
 }
 
 /// Parses a mesh file's bytes (decompressing them first if `gzip`) as [`load_mesh`] does
 /// after reading the file: the fuzz targets and tests call it without a file system.
-/// `path_for_messages` only names the file in errors.
+/// `path_for_messages` only names the file in errors. A glTF file whose buffers are
+/// external files is refused (there is no folder to read them from).
 pub fn parse_mesh_bytes(
     path_for_messages: &Path,
     format: MeshFormat,
     gzip: bool,
     bytes: &[u8],
 ) -> Result<Mesh> {
-    Ok(parse(path_for_messages, format, gzip, bytes, false)?.mesh)
+    Ok(parse(path_for_messages, format, gzip, bytes, false, None)?.mesh)
+}
+
+/// Parses a glTF or GLB file's bytes with its materials and textures, as
+/// [`load_mesh_with_materials`] does, without a file system: buffers and images must be
+/// in data URIs or the GLB's binary chunk (an external one is an error). For the fuzz
+/// targets and tests.
+pub fn parse_gltf_bytes(path_for_messages: &Path, bytes: &[u8]) -> Result<MeshFile> {
+    let file = gltf::parse(path_for_messages, bytes, None, true)?;
+    file.mesh.check(path_for_messages)?;
+    Ok(file)
 }
 
 fn parse(
@@ -108,6 +135,7 @@ fn parse(
     gzip: bool,
     bytes: &[u8],
     read_materials: bool,
+    folder: Option<&Path>,
 ) -> Result<MeshFile> {
     let decompressed;
     let bytes = if gzip {
@@ -119,6 +147,7 @@ fn parse(
     let file = match format {
         MeshFormat::Obj => obj::parse(path, bytes, read_materials)?,
         MeshFormat::Ply => ply::parse(path, bytes)?,
+        MeshFormat::Gltf | MeshFormat::Glb => gltf::parse(path, bytes, folder, read_materials)?,
     };
     file.mesh.check(path)?;
     let mut file = file;
@@ -277,6 +306,9 @@ mod tests {
         assert_eq!(f("DRAGON.OBJ.GZ"), Some((MeshFormat::Obj, true)));
         assert_eq!(f("x.ply"), Some((MeshFormat::Ply, false)));
         assert_eq!(f("x.ply.gz"), Some((MeshFormat::Ply, true)));
+        assert_eq!(f("Scene.GLTF"), Some((MeshFormat::Gltf, false)));
+        assert_eq!(f("scene.glb"), Some((MeshFormat::Glb, false)));
+        assert_eq!(f("scene.glb.gz"), None);
         assert_eq!(f("x.stl"), None);
         assert_eq!(f("x.gz"), None);
     }

@@ -122,6 +122,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8], read_materials: bool) -> Result<M
         materials,
         warnings,
         notes: Vec::new(),
+        camera: None,
     })
 }
 

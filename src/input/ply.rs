@@ -123,6 +123,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<MeshFile> {
         materials: Materials::default(),
         warnings: polygons.warnings(path),
         notes: Vec::new(),
+        camera: None,
     })
 }
 

@@ -129,6 +129,7 @@ impl SceneMeshes {
         let mut loaded: Vec<(usize, Mesh, Materials)> = Vec::new();
         let mut warnings = Vec::new();
         let mut notes = Vec::new();
+        let mut file_camera = None;
         for (i, placed) in self.meshes.iter().enumerate() {
             let earlier = self.meshes[..i]
                 .iter()
@@ -147,6 +148,9 @@ impl SceneMeshes {
                             })?;
                     warnings.extend(file.warnings);
                     notes.extend(file.notes);
+                    if i == 0 {
+                        file_camera = file.camera;
+                    }
                     (file.mesh, file.materials)
                 }
             };
@@ -182,6 +186,12 @@ impl SceneMeshes {
                 materials,
                 warnings,
                 notes,
+                // A file's own camera (glTF) frames that file as it stands: a scene of
+                // one mesh, not moved.
+                camera: match self.meshes.as_slice() {
+                    [only] if only.transform.is_none() => file_camera,
+                    _ => None,
+                },
             },
             bounds,
         })

@@ -121,6 +121,7 @@ impl MeshSource {
                     materials,
                     warnings: Vec::new(),
                     notes: Vec::new(),
+                    camera: None,
                 })
             }
         }
