@@ -43,7 +43,7 @@ fn build(c: &mut Criterion) {
 fn scene() -> (Mesh, Bin32Bvh, Camera) {
     let mesh = hillside(70_000);
     let bvh = Bin32Bvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
-    let camera = Camera::auto(&mesh.bounds(), 512, 512).unwrap();
+    let camera = Camera::bench(&mesh.bounds(), 512, 512).unwrap();
     (mesh, bvh, camera)
 }
 

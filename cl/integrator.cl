@@ -6,14 +6,8 @@
  * trace.cl, against a BVH or every triangle, into programs built with sampling; the host
  * binds the parameters by name (src/device/tracer.rs; tests/layout.rs compares them). */
 
-/* The ray direction of pixel (x, y) jittered within the pixel. */
-FORCE_INLINE float3 jittered_ray(float4 p0, float4 du, float4 dv, uint x, uint y, uint key) {
-    float fx = (float)x + sample_1d(key, 0u);
-    float fy = (float)y + sample_1d(key, 1u);
-    return (float3)((p0.x + fx * du.x) + fy * dv.x,
-                    (p0.y + fx * du.y) + fy * dv.y,
-                    (p0.z + fx * du.z) + fy * dv.z);
-}
+/* jittered_ray, the camera ray of a sample, is in sampling.cl (so the probe program can
+ * compare it with the host's). */
 
 /* The unit geometric normal of tri, turned to face dir's origin side. */
 FORCE_INLINE float3 facing_normal(const __global Triangle* tri, float3 dir) {
@@ -64,13 +58,14 @@ FORCE_INLINE void add_sample(__global long4* accum, __global uint* rays, uint ac
     if (x < col0 || x >= col_end || y < row0 || y >= row_end) return;   \
     uint key = sampler_key(seed, y * width + x, sample);
 
-/* SAMPLE_PIXEL, then the closest hit of the pixel's jittered camera ray: where the ambient
- * occlusion and shadow samples start from. */
+/* SAMPLE_PIXEL, then the closest hit of the pixel's jittered camera ray (from org along
+ * dir): where the ambient occlusion and shadow samples start from. */
 #define SAMPLE_CAMERA_HIT                                                \
     SAMPLE_PIXEL                                                         \
-    float3 dir = jittered_ray(p0, du, dv, x, y, key);                    \
+    float3 org;                                                          \
+    float3 dir = jittered_ray(CAMERA, x, y, key, &org);                  \
     float t;                                                             \
-    uint hit = trace(SCENE, eye.xyz, dir, INFINITY, false, false, &t);
+    uint hit = trace(SCENE, org, dir, INFINITY, false, false, &t);
 
 FORCE_INLINE bool occluded(SCENE_PARAMS, float3 org, float3 dir, float t_max) {
     float t;
@@ -86,7 +81,7 @@ __kernel void sample_ao(SAMPLE_PARAMS) {
     float3 radiance = (float3)(0.0f);
     uint count = 1;
     if (hit != MISS) {
-        SurfacePoint sp = surface_point(SURFACE, &tris[hit], eye.xyz, dir, t, offset, camera_cone(du, t));
+        SurfacePoint sp = surface_point(SURFACE, &tris[hit], org, dir, t, offset, camera_cone(du, t));
         uint open = 0;
         for (uint k = 0; k < ao_samples; ++k) {
             float3 d = cosine_direction(sp.ns, sample_1d(key, bounce_dim(0) + 2 * k), sample_1d(key, bounce_dim(0) + 2 * k + 1));
@@ -104,7 +99,7 @@ __kernel void sample_shadow(SAMPLE_PARAMS) {
     float3 radiance = (float3)(0.0f);
     uint count = 1;
     if (hit != MISS) {
-        SurfacePoint sp = surface_point(SURFACE, &tris[hit], eye.xyz, dir, t, offset, camera_cone(du, t));
+        SurfacePoint sp = surface_point(SURFACE, &tris[hit], org, dir, t, offset, camera_cone(du, t));
         float3 origin = sp.origin;
         /* light.w: 0 for a direction towards the light, 1 for the light's position. */
         float3 l = light.w == 0.0f ? normalize(light.xyz) : normalize(light.xyz - origin);
@@ -144,8 +139,8 @@ FORCE_INLINE float3 emitted(SURFACE_PARAMS, const __global Triangle* e, float w0
 
 __kernel void sample_path(SAMPLE_PARAMS) {
     SAMPLE_PIXEL
-    float3 org = eye.xyz;
-    float3 dir = jittered_ray(p0, du, dv, x, y, key);
+    float3 org;
+    float3 dir = jittered_ray(CAMERA, x, y, key, &org);
     float3 radiance = (float3)(0.0f), throughput = (float3)(1.0f);
     uint count = 1;
     float t;

@@ -1,6 +1,7 @@
 /* probe.cl: reports how this device's compiler lays out the shared structs and sees the
  * constants the host writes in front of every program, so that tests/layout.rs can compare
- * them with the Rust side. Its program is common.cl, texture.cl, nodes.cl (every struct) and
+ * them with the Rust side, and the camera rays the kernels trace (tests/camera.rs). Its
+ * program is common.cl, texture.cl, nodes.cl (every struct), camera.cl, sampling.cl and
  * this. */
 
 #define OFFSET(type, field) ((uint)((const char*)&probe_##type.field - (const char*)&probe_##type))
@@ -79,6 +80,8 @@ __kernel void probe_constants(__global uint* out) {
     out[i++] = (uint)SHADE_DEPTH;
     out[i++] = (uint)SHADE_LAMBERT;
     out[i++] = DIMS_PER_BOUNCE;
+    out[i++] = LENS_DIM;
+    out[i++] = LENS_TRIES;
     out[i++] = as_uint(SHADOW_AMBIENT);
     out[i++] = ROULETTE_AFTER;
     out[i++] = as_uint(RADIANCE_SCALE);
@@ -93,4 +96,25 @@ __kernel void probe_constants(__global uint* out) {
     out[i++] = SURFACE_COLORS;
     out[i++] = TRIANGLE_MASKED;
     out[i++] = as_uint(BOUNCE_CONE_SPREAD);
+}
+
+/* The camera rays of every pixel of a width x height image, for tests/camera.rs: the camera
+ * (Pinhole's seven float4, src/camera.rs) in cam; for pixel i, out[4i] and out[4i + 1] are
+ * the origin and direction of its primary ray (camera_ray, as trace_primary traces it),
+ * out[4i + 2] and out[4i + 3] those of the ray of sample `sample` (jittered_ray, as the
+ * progressive modes trace it). */
+__kernel void probe_camera_rays(__global const float4* cam, uint width, uint height,
+                                uint seed, uint sample, __global float4* out) {
+    uint x = get_global_id(0), y = get_global_id(1);
+    if (x >= width || y >= height) return;
+    float4 eye = cam[0], p0 = cam[1], du = cam[2], dv = cam[3];
+    float4 forward = cam[4], lens_u = cam[5], lens_v = cam[6];
+    uint i = 4 * (y * width + x);
+    float3 org;
+    float3 dir = camera_ray(CAMERA, x, y, &org);
+    out[i] = (float4)(org, 0.0f);
+    out[i + 1] = (float4)(dir, 0.0f);
+    dir = jittered_ray(CAMERA, x, y, sampler_key(seed, y * width + x, sample), &org);
+    out[i + 2] = (float4)(org, 0.0f);
+    out[i + 3] = (float4)(dir, 0.0f);
 }

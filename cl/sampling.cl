@@ -1,6 +1,7 @@
-/* sampling.cl: random numbers and the sampling of directions and points, mirrored by
+/* sampling.cl: random numbers, the sampling of directions and points, and the camera ray
+ * of a sample (after camera.cl, whose functions it uses), mirrored by
  * src/render/sampling.rs so that the host reference and the devices draw the same numbers.
- * DIMS_PER_BOUNCE comes from the host (src/render/sampling.rs). */
+ * DIMS_PER_BOUNCE, LENS_DIM and LENS_TRIES come from the host (src/render/sampling.rs). */
 
 /* Chris Wellons' lowbias32 integer hash. */
 FORCE_INLINE uint hash_u32(uint x) {
@@ -44,3 +45,26 @@ FORCE_INLINE float3 triangle_point(float3 a, float3 b, float3 c, float u1, float
     return a * w0 + b * w1 + c * (1.0f - w0 - w1);
 }
 
+
+/* A uniform point of the unit disk from dimensions dim, dim + 1, ...: the first of
+ * LENS_TRIES pairs in the square [-1, 1)^2 that falls inside it, else the centre (once in
+ * about 5e10). Rejection rather than a polar map: no sin and cos, whose device versions
+ * may differ from the host's in the last bit, so that lens rays are the host's bit for bit. */
+FORCE_INLINE float2 disk_point(uint key, uint dim) {
+    for (uint k = 0; k < LENS_TRIES; ++k) {
+        float a = 2.0f * sample_1d(key, dim + 2 * k) - 1.0f;
+        float b = 2.0f * sample_1d(key, dim + 2 * k + 1) - 1.0f;
+        if (a * a + b * b < 1.0f) return (float2)(a, b);
+    }
+    return (float2)(0.0f, 0.0f);
+}
+
+/* The ray of pixel (x, y) jittered within the pixel and, with an open lens, from a point
+ * of the lens drawn from dimensions LENS_DIM on (far above the bounces' dimensions, so a
+ * pinhole's samples stay as they were): its direction returned, its origin in *org. */
+FORCE_INLINE float3 jittered_ray(CAMERA_PARAMS, uint x, uint y, uint key, float3* org) {
+    float fx = (float)x + sample_1d(key, 0u);
+    float fy = (float)y + sample_1d(key, 1u);
+    if (lens_u.w == 0.0f) return camera_ray_at(CAMERA, fx, fy, org);
+    return lens_ray(CAMERA, fx, fy, disk_point(key, LENS_DIM), org);
+}

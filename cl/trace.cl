@@ -12,12 +12,13 @@ __kernel void trace_primary(SCENE_PARAMS, CAMERA_BAND_PARAMS,
                             __global uint* colors, uint color_pitch) {
     uint x = get_global_id(0), y = get_global_id(1);
     if (x >= width || y < row0 || y >= row_end) return;
-    float3 dir = camera_ray(p0, du, dv, x, y);
+    float3 org;
+    float3 dir = camera_ray(CAMERA, x, y, &org);
     float t;
-    uint best = trace(SCENE, eye.xyz, dir, INFINITY, false, false, &t);
+    uint best = trace(SCENE, org, dir, INFINITY, false, false, &t);
     float3 n = (float3)(0.0f);
     if (best != MISS && shade != SHADE_DEPTH) {
-        n = surface_point(SURFACE, &tris[best], eye.xyz, dir, t, 0.0f, 0.0f).normal;
+        n = surface_point(SURFACE, &tris[best], org, dir, t, 0.0f, 0.0f).normal;
     }
     store_pixel(hits, hit_pitch, colors, color_pitch, x, y - row0, best, t, dir, tris, n, shade, near, far);
 }

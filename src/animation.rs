@@ -122,8 +122,9 @@ impl Animation {
         match &self.0 {
             Motion::Keyframes(keys) => Ok(flags.over(keyed(keys, frame).over(*scene))),
             Motion::Turntable(t) => {
-                let start = Camera::from_settings(&flags.over(*scene), bounds)?;
-                Ok(turned(t, frame, &start))
+                let base = flags.over(*scene);
+                let start = Camera::from_settings(&base, bounds)?;
+                Ok(turned(t, frame, &start, &base))
             }
         }
     }
@@ -136,8 +137,7 @@ fn keyed(keys: &[Keyframe], frame: u32) -> CameraSettings {
         look_at: track(keys, frame, |k| k.look_at),
         up: track(keys, frame, |k| k.up),
         fov: track(keys, frame, |k| k.fov.map(|f| [f])).map(|[f]| f),
-        width: None,
-        height: None,
+        ..Default::default()
     }
 }
 
@@ -173,8 +173,11 @@ fn track<const N: usize>(
 }
 
 /// `start` turned for `frame`: eye (and up, when the axis is not up itself) by
-/// `degrees · frame / frames` about the axis through the look-at point.
-fn turned(t: &Turntable, frame: u32, start: &Camera) -> CameraSettings {
+/// `degrees · frame / frames` about the axis through the look-at point. The projection
+/// and lens stay those of `base`, the settings `start` was made from, except that an
+/// orthographic height is `start`'s, so that an auto-fitted one does not change from
+/// frame to frame.
+fn turned(t: &Turntable, frame: u32, start: &Camera, base: &CameraSettings) -> CameraSettings {
     let settings = |eye: Vec3, up: Vec3| CameraSettings {
         eye: Some(eye.to_array()),
         look_at: Some(start.look_at.to_array()),
@@ -182,6 +185,10 @@ fn turned(t: &Turntable, frame: u32, start: &Camera) -> CameraSettings {
         fov: Some(start.fov),
         width: Some(start.width),
         height: Some(start.height),
+        projection: Some(start.projection),
+        ortho_height: (start.projection == crate::camera::Projection::Orthographic)
+            .then_some(start.ortho_height),
+        ..*base
     };
     // Whole turns are taken off first, so that frame `frames` of a full turn is exactly
     // frame 0, not its rounded rotation by 2π.

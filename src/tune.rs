@@ -122,7 +122,7 @@ pub(crate) fn tune_device(
     repetitions: u32,
     on_result: &mut dyn FnMut(&TuneResult),
 ) -> Result<Vec<TuneResult>> {
-    let camera = Camera::auto(&mesh.bounds(), 1920, 1080)?;
+    let camera = Camera::bench(&mesh.bounds(), 1920, 1080)?;
     let shade = ShadeParams::new(Shade::Lambert, &camera, &mesh.bounds());
     let rays = diffuse_rays(mesh, &camera);
     let mut results = Vec::new();

@@ -21,7 +21,7 @@ v -1 1 0
 f 1 2 3 4
 ";
 
-/// Distance from the auto eye to the square: half the box diagonal over sin(fov / 2).
+/// Distance from the bench view's eye to the square: half the box diagonal over sin(fov / 2).
 fn auto_distance() -> f32 {
     (2f32.sqrt()) / (22.5f32.to_radians()).sin()
 }
@@ -94,6 +94,10 @@ fn unsized_args(mesh: &Path, output: &Path, method: &str) -> Vec<String> {
         output.display().to_string(),
         "--method".into(),
         method.into(),
+        // The benchmark's straight-on view, whose distances these tests know
+        // (auto_distance); the auto view has tests of its own (tests/camera.rs).
+        "--camera".into(),
+        "bench".into(),
     ]
 }
 
@@ -554,7 +558,7 @@ fn bad_options_exit_2() {
         2,
     );
     assert!(msg.contains("up"), "{msg}");
-    // up parallel to the auto view direction (-z)
+    // up parallel to the bench view's direction (-z)
     fails(&w, &with(base(), &["--up", "0,0,-3"]), &[], 2);
     fails(&w, &with(base(), &["--up", "0,0,0"]), &[], 2);
 }

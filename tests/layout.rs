@@ -23,7 +23,7 @@ use cltrace::render::integrator::{
     Accumulation, Lighting, MAX_SAMPLE_RADIANCE, RADIANCE_SCALE, ROULETTE_AFTER, SHADOW_AMBIENT,
     SampleSettings,
 };
-use cltrace::render::sampling::DIMS_PER_BOUNCE;
+use cltrace::render::sampling::{DIMS_PER_BOUNCE, LENS_DIM, LENS_TRIES};
 use cltrace::render::{Hit, MISS, Shade};
 use ocl::core::{KernelArgInfo, KernelArgInfoResult, KernelInfo, KernelInfoResult};
 
@@ -154,6 +154,8 @@ fn device_constants_match_the_rust_constants() {
         ("SHADE_DEPTH", Shade::Depth.code() as u32),
         ("SHADE_LAMBERT", Shade::Lambert.code() as u32),
         ("DIMS_PER_BOUNCE", DIMS_PER_BOUNCE),
+        ("LENS_DIM", LENS_DIM),
+        ("LENS_TRIES", LENS_TRIES),
         ("SHADOW_AMBIENT", SHADOW_AMBIENT.to_bits()),
         ("ROULETTE_AFTER", ROULETTE_AFTER),
         ("RADIANCE_SCALE", RADIANCE_SCALE.to_bits()),

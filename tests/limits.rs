@@ -18,7 +18,7 @@ use cltrace::render::{Shade, ShadeParams};
 fn images_larger_than_one_allocation_are_rendered_in_bands() {
     let mesh = generate(Generator::Sphere { subdivisions: 3 });
     let bvh = Bin32Bvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
-    let camera = Camera::auto(&mesh.bounds(), 96, 80).unwrap();
+    let camera = Camera::bench(&mesh.bounds(), 96, 80).unwrap();
     let shade = ShadeParams::new(Shade::Lambert, &camera, &mesh.bounds());
     let settings = SampleSettings {
         lighting: Lighting::Ao {

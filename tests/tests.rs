@@ -7,6 +7,7 @@ mod common;
 mod bad_input_corpus;
 mod bvh;
 mod bvh_optimize;
+mod camera;
 mod cli;
 mod commands;
 mod concurrency;

@@ -273,7 +273,7 @@ fn run_into(
             for &(w, h) in &req.resolutions {
                 diffuse.insert(
                     (w, h),
-                    diffuse_rays(&mesh, &Camera::auto(&mesh.bounds(), w, h)?),
+                    diffuse_rays(&mesh, &Camera::bench(&mesh.bounds(), w, h)?),
                 );
             }
         }
@@ -365,7 +365,7 @@ fn measure(
     diffuse: Option<&[Ray]>,
     kind: RayKind,
 ) -> Result<BenchRow> {
-    let camera = Camera::auto(&mesh.bounds(), width, height)?;
+    let camera = Camera::bench(&mesh.bounds(), width, height)?;
     let shade = ShadeParams::new(Shade::Lambert, &camera, &mesh.bounds());
     let diffuse = diffuse.unwrap_or_default();
     let rays = match kind {

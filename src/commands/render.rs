@@ -428,14 +428,25 @@ fn render_with(
     };
     let camera = Camera::from_settings(&camera_settings, &bounds)?;
     v.detail(format!(
-        "camera: eye {:?}, look-at {:?}, up {:?}, fov {}, {}x{}",
+        "camera: eye {:?}, look-at {:?}, up {:?}, fov {}, {}x{}{}",
         camera.eye.to_array(),
         camera.look_at.to_array(),
         camera.up.to_array(),
         camera.fov,
         camera.width,
-        camera.height
+        camera.height,
+        camera.lens_description()
     ));
+    if camera.aperture() > 0.0 && !matches!(shade, Shade::Ao | Shade::Shadow | Shade::Path) {
+        // A single-hit mode traces one ray through each pixel's centre: there is no lens
+        // sample to blur with, so the image is the pinhole's.
+        v.say(format!(
+            "warning: --aperture {} blurs only in the progressive modes (ao, shadow, path); \
+             {} renders as a pinhole",
+            camera.aperture(),
+            shade.name()
+        ));
+    }
     let sampling = sample_settings(&render, shade, &bounds)?;
     let shade = ShadeParams::new(shade, &camera, &bounds);
 
@@ -792,11 +803,12 @@ fn part_settings(
         format!("scene={scene:016x}"),
         format!("image={}x{}", camera.width, camera.height),
         format!(
-            "camera=eye {:?} look_at {:?} up {:?} fov {:?}",
+            "camera=eye {:?} look_at {:?} up {:?} fov {:?}{}",
             camera.eye.to_array(),
             camera.look_at.to_array(),
             camera.up.to_array(),
-            camera.fov
+            camera.fov,
+            camera.lens_description()
         ),
         format!("shade={}", shade.name()),
         format!(

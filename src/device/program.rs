@@ -106,6 +106,8 @@ pub fn shared_constants() -> Vec<(&'static str, Constant)> {
         ("SHADE_DEPTH", I32(Shade::Depth.code())),
         ("SHADE_LAMBERT", I32(Shade::Lambert.code())),
         ("DIMS_PER_BOUNCE", U32(sampling::DIMS_PER_BOUNCE)),
+        ("LENS_DIM", U32(sampling::LENS_DIM)),
+        ("LENS_TRIES", U32(sampling::LENS_TRIES)),
         ("SHADOW_AMBIENT", F32(integrator::SHADOW_AMBIENT)),
         ("ROULETTE_AFTER", U32(integrator::ROULETTE_AFTER)),
         ("RADIANCE_SCALE", F32(integrator::RADIANCE_SCALE)),
@@ -207,8 +209,16 @@ fn program_files(layout: Option<Layout>, sampling: bool) -> Vec<String> {
     files
 }
 
-/// The files of the probe program: the shared structs, every node struct, the probe.
-const PROBE_FILES: [&str; 4] = ["common.cl", "texture.cl", "nodes.cl", "probe.cl"];
+/// The files of the probe program: the shared structs, every node struct, the camera and
+/// its samples, the probe.
+const PROBE_FILES: [&str; 6] = [
+    "common.cl",
+    "texture.cl",
+    "nodes.cl",
+    "camera.cl",
+    "sampling.cl",
+    "probe.cl",
+];
 
 /// The source of a program: the constants header, then each file after a `#line` naming
 /// it, so that a build log points into the file itself.

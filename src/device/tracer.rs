@@ -163,15 +163,19 @@ kernel_params! {
 }
 
 kernel_params! {
-    /// `CAMERA_BAND_PARAMS` (cl/camera.cl), which every image kernel takes: the camera's
-    /// eye and pixel grid, the image width, and the band of rows `[row0, row_end)` one
-    /// launch covers (its images' row 0 is image row `row0`).
+    /// `CAMERA_BAND_PARAMS` (cl/camera.cl), which every image kernel takes: the camera
+    /// ([`Pinhole`]'s fields: eye, pixel grid, projection and lens), the image width, and
+    /// the band of rows `[row0, row_end)` one launch covers (its images' row 0 is image
+    /// row `row0`).
     #[derive(Default)]
     struct BandParams {
         eye: Float4,
         p0: Float4,
         du: Float4,
         dv: Float4,
+        forward: Float4,
+        lens_u: Float4,
+        lens_v: Float4,
         width: u32,
         row0: u32,
         row_end: u32,
@@ -187,6 +191,9 @@ impl BandParams {
             p0: f4(camera.p0),
             du: f4(camera.du),
             dv: f4(camera.dv),
+            forward: f4(camera.forward),
+            lens_u: f4(camera.lens_u),
+            lens_v: f4(camera.lens_v),
             width,
             row0: 0,
             row_end: 0,

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 
 use cltrace::bvh::Layout;
-use cltrace::camera::CameraSettings;
+use cltrace::camera::{CameraSettings, Projection, View};
 use cltrace::commands::frames::{FrameRange, Frames};
 use cltrace::commands::render::RenderRequest;
 use cltrace::input::scene_file::RenderSettings;
@@ -111,6 +111,11 @@ enum Fallback {
 /// The scene file's `[camera]` keys, as flags.
 #[derive(Args)]
 struct CameraArgs {
+    /// Which view frames the mesh where --eye and --look-at leave it open [default:
+    /// scene's, else auto]
+    #[arg(long = "camera", value_parser = choice::<View>())]
+    view: Option<View>,
+
     #[arg(value_parser = whole_number, long, help = help::width())]
     width: Option<u32>,
 
@@ -120,7 +125,8 @@ struct CameraArgs {
     #[arg(long, help = help::fov())]
     fov: Option<f32>,
 
-    /// Eye position `x,y,z` [default: auto framing, in front of the mesh along +z]
+    /// Eye position `x,y,z` [default: the view's: auto fits the mesh's box from the
+    /// front-right and above]
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     eye: Option<[f32; 3]>,
 
@@ -131,17 +137,46 @@ struct CameraArgs {
     /// Up direction `x,y,z` [default: 0,1,0]
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     up: Option<[f32; 3]>,
+
+    /// How rays leave the camera [default: scene's, else perspective]
+    #[arg(long, value_parser = choice::<Projection>())]
+    projection: Option<Projection>,
+
+    /// Height of the orthographic image plane, in scene units, above 0 [default: scene's,
+    /// else fitted to the mesh's box]
+    #[arg(long, allow_hyphen_values = true)]
+    ortho_height: Option<f32>,
+
+    /// Lens diameter for depth of field, in scene units; 0 is a pinhole. Blurs only in
+    /// the progressive modes (ao, shadow, path) [default: scene's, else 0]
+    #[arg(long, allow_hyphen_values = true)]
+    aperture: Option<f32>,
+
+    /// Distance in focus, along the view direction, in scene units [default: scene's,
+    /// else the look-at point's distance]
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "focus_on")]
+    focus_distance: Option<f32>,
+
+    /// Focus on the point `x,y,z` (the focus distance is its distance along the view)
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    focus_on: Option<[f32; 3]>,
 }
 
 impl From<CameraArgs> for CameraSettings {
     fn from(a: CameraArgs) -> CameraSettings {
         CameraSettings {
+            view: a.view,
             eye: a.eye,
             look_at: a.look_at,
             up: a.up,
             fov: a.fov,
             width: a.width,
             height: a.height,
+            projection: a.projection,
+            ortho_height: a.ortho_height,
+            aperture: a.aperture,
+            focus_distance: a.focus_distance,
+            focus_on: a.focus_on,
         }
     }
 }

@@ -950,8 +950,7 @@ impl Reader<'_> {
             look_at: Some((eye + forward * ahead).to_array()),
             up: Some(up.to_array()),
             fov: Some(fov),
-            width: None,
-            height: None,
+            ..CameraSettings::default()
         })
     }
 

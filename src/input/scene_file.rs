@@ -5,13 +5,19 @@
 //! ```toml
 //! mesh = "room.obj"            # or a [generator] table, e.g. kind = "sphereflake"
 //!
-//! [camera]                     # every key optional; missing ones use the "auto" framing
+//! [camera]                     # every key optional; missing ones use the view's framing
+//! view = "auto"                # or "bench", the benchmark's straight-on view
 //! eye = [0.0, 1.0, 4.0]
 //! look_at = [0.0, 0.5, 0.0]
 //! up = [0.0, 1.0, 0.0]
 //! fov = 45.0                   # vertical, degrees
 //! width = 1280
 //! height = 720
+//! projection = "perspective"   # or "orthographic"
+//! ortho_height = 2.0           # orthographic image height, scene units; default: fitted
+//! aperture = 0.0               # lens diameter, scene units; 0 (default) is a pinhole
+//! focus_distance = 4.0         # along the view; default: look_at's distance
+//! focus_on = [0.0, 0.5, 0.0]   # or a point to focus on (not both)
 //!
 //! [render]
 //! method = "cl-bvh"
@@ -76,7 +82,7 @@ use toml::Spanned;
 
 use crate::animation::{Animation, Keyframe, Turntable};
 use crate::bvh::Layout;
-use crate::camera::CameraSettings;
+use crate::camera::{CameraSettings, Projection, View};
 use crate::error::{Error, Result};
 use crate::input::generate::Generator;
 use crate::input::load_mesh;
@@ -511,12 +517,18 @@ impl GroundTable {
 #[derive(Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct CameraTable {
+    view: Option<View>,
     eye: Option<[f32; 3]>,
     look_at: Option<[f32; 3]>,
     up: Option<[f32; 3]>,
     fov: Option<f32>,
     width: Option<u32>,
     height: Option<u32>,
+    projection: Option<Projection>,
+    ortho_height: Option<f32>,
+    aperture: Option<f32>,
+    focus_distance: Option<f32>,
+    focus_on: Option<[f32; 3]>,
     // Spanned, so that a bad key's error names its line.
     keyframe: Option<Vec<Spanned<Keyframe>>>,
     turntable: Option<Spanned<Turntable>>,
@@ -526,12 +538,18 @@ impl CameraTable {
     /// The settings, and the animation checked; `text` and `path` place its errors.
     fn split(self, text: &str, path: &Path) -> Result<(CameraSettings, Option<Animation>)> {
         let settings = CameraSettings {
+            view: self.view,
             eye: self.eye,
             look_at: self.look_at,
             up: self.up,
             fov: self.fov,
             width: self.width,
             height: self.height,
+            projection: self.projection,
+            ortho_height: self.ortho_height,
+            aperture: self.aperture,
+            focus_distance: self.focus_distance,
+            focus_on: self.focus_on,
         };
         let at = |span: std::ops::Range<usize>, message: String| {
             Error::input_at(path, line_of(text, span.start), message)

@@ -9,7 +9,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::sampling::{Sampler, bounce_dim, cosine_direction, triangle_point};
+use super::sampling::{
+    LENS_DIM, Sampler, bounce_dim, cosine_direction, disk_point, triangle_point,
+};
 use crate::camera::Pinhole;
 use crate::geometry::Ray;
 use crate::intersect::ClosestHit;
@@ -190,15 +192,23 @@ pub(crate) fn sky(d: Vec3) -> Vec3 {
     }
 }
 
-/// The ray of pixel (x, y), jittered within the pixel by the sampler's first two numbers.
+/// The ray of pixel (x, y), jittered within the pixel by the sampler's first two numbers
+/// and, with an open lens, from the lens point of dimensions [`LENS_DIM`] on (the kernels'
+/// `jittered_ray`).
 pub(crate) fn jittered_ray(camera: &Pinhole, x: u32, y: u32, s: &Sampler) -> Ray {
     let fx = x as f32 + s.get(0);
     let fy = y as f32 + s.get(1);
-    let d = |k: usize| (camera.p0[k] + fx * camera.du[k]) + fy * camera.dv[k];
-    Ray::new(
-        Vec3::from_slice(&camera.eye[..3]),
-        Vec3::new(d(0), d(1), d(2)),
-    )
+    if !camera.has_lens() {
+        return camera.ray_at(fx, fy);
+    }
+    camera.lens_ray(fx, fy, disk_point(s, LENS_DIM))
+}
+
+/// The camera ray of one sample of pixel (x, y), as the progressive modes trace it:
+/// jittered within the pixel and through the lens (for tests comparing it with the
+/// kernels').
+pub fn sample_ray(camera: &Pinhole, (x, y, width): (u32, u32, u32), seed: u32, sample: u32) -> Ray {
+    jittered_ray(camera, x, y, &Sampler::new(seed, y * width + x, sample))
 }
 
 /// The unit geometric normal of `t`, turned to face `dir`'s origin side.

@@ -196,7 +196,7 @@ pub fn coverage(frame: &Frame) -> usize {
 }
 
 pub fn auto_camera(mesh: &Mesh, width: u32, height: u32) -> Camera {
-    Camera::auto(&mesh.bounds(), width, height).unwrap()
+    Camera::bench(&mesh.bounds(), width, height).unwrap()
 }
 
 /// A builder setting for the BVH tests.
