@@ -18,7 +18,7 @@ __kernel void trace_primary(SCENE_PARAMS, CAMERA_BAND_PARAMS,
     uint best = trace(SCENE, org, dir, INFINITY, false, false, &t);
     float3 n = (float3)(0.0f);
     if (best != MISS && shade != SHADE_DEPTH) {
-        n = surface_point(SURFACE, &tris[best], org, dir, t, 0.0f, 0.0f).normal;
+        n = shading_normal(SURFACE, &tris[best], org, dir);
     }
     store_pixel(hits, hit_pitch, colors, color_pitch, x, y - row0, best, t, dir, tris, n, shade, near, far);
 }

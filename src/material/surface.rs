@@ -276,6 +276,27 @@ impl Surface {
         }
     }
 
+    /// `shading_normal` in cl/surface.cl: the unit shading normal at a primary hit for the
+    /// single-hit shade modes, the vertex normals interpolated (no normal map).
+    pub fn shading_normal(&self, tri: &Triangle, (org, dir): (Vec3, Vec3)) -> Vec3 {
+        let v0 = Vec3::from(tri.v0);
+        let cross_e = cross3(Vec3::from(tri.v1) - v0, Vec3::from(tri.v2) - v0);
+        let front = cross_e / length3(cross_e);
+        if self.flags & SURFACE_NORMALS == 0 {
+            return front;
+        }
+        let w = WatertightRay::new(&crate::geometry::Ray::new(org, dir)).barycentrics(tri);
+        let [i0, i1, i2] = self.corner_indices(tri.prim);
+        let nv = |i| Self::vec3(&self.normals, i);
+        let (n0, n1, n2) = (nv(i0), nv(i1), nv(i2));
+        if !(dot3(n0, n0) > 0.0 && dot3(n1, n1) > 0.0 && dot3(n2, n2) > 0.0) {
+            return front;
+        }
+        let mixed = lerp3(n0, n1, n2, w);
+        let len = length3(mixed);
+        if len > 0.0 { mixed / len } else { front }
+    }
+
     /// `emitted` in cl/integrator.cl: the radiance emitter `e` sends from its point with
     /// barycentrics `(w0, w1, 1 - w0 - w1)`.
     pub fn emitted(&self, e: &Triangle, w0: f32, w1: f32) -> Vec3 {

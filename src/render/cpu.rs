@@ -79,7 +79,7 @@ pub(crate) fn pixel(
             let tri = &tracer.triangles()[i];
             let n = match shade.shade {
                 super::Shade::Depth => glam::Vec3::ZERO,
-                _ => surface.point(tri, (ray.origin, d), t, 0.0, 0.0).normal,
+                _ => surface.shading_normal(tri, (ray.origin, d)),
             };
             (
                 Hit {
