@@ -20,6 +20,8 @@ fn main() -> ExitCode {
         Request::Wait => print_message("interrupted again: quitting once the file is written"),
         Request::Exit => std::process::exit(130),
     });
+    // OpenCL runtimes may replace them; the library puts them back (src/interrupt.rs).
+    interrupt::keep_handlers();
     let command = match flags::parse() {
         Ok(command) => command,
         Err(code) => return code,

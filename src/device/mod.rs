@@ -432,6 +432,7 @@ impl ClDevice {
             Some(ocl::flags::CommandQueueProperties::PROFILING_ENABLE),
         )
         .map_err(fail)?;
+        crate::interrupt::reclaim_handlers();
         Ok(ClDevice {
             info,
             context,
