@@ -30,41 +30,45 @@ FORCE_INLINE WatertightRay watertight_ray(float3 org, float3 dir) {
     return r;
 }
 
+/* The watertight test's edge functions of triangle (v0, v1, v2) for the ray (u, v, w: the
+ * unnormalised barycentrics of v0, v1, v2) and the vertices' sheared depths along it. */
+typedef struct { float u, v, w, a_z, b_z, c_z; } EdgeFunctions;
+
+FORCE_INLINE EdgeFunctions edge_functions(const WatertightRay* r, float3 v0, float3 v1, float3 v2) {
+    float3 a = v0 - r->org, b = v1 - r->org, c = v2 - r->org;
+    EdgeFunctions e;
+    e.a_z = pick(a, r->kz); e.b_z = pick(b, r->kz); e.c_z = pick(c, r->kz);
+    float ax = pick(a, r->kx) - r->sx * e.a_z, ay = pick(a, r->ky) - r->sy * e.a_z;
+    float bx = pick(b, r->kx) - r->sx * e.b_z, by = pick(b, r->ky) - r->sy * e.b_z;
+    float cx = pick(c, r->kx) - r->sx * e.c_z, cy = pick(c, r->ky) - r->sy * e.c_z;
+    e.u = cx * by - cy * bx;
+    e.v = ax * cy - ay * cx;
+    e.w = bx * ay - by * ax;
+    return e;
+}
+
 /* Ray parameter of the hit with triangle (v0, v1, v2) if it is closer than t_max, else a
  * negative number. Watertight: a ray through a shared edge or vertex hits at least one of
  * the triangles. Zero-area triangles never hit. */
 FORCE_INLINE float intersect_triangle(const WatertightRay* r, float3 v0, float3 v1, float3 v2, float t_max) {
-    float3 a = v0 - r->org, b = v1 - r->org, c = v2 - r->org;
-    float a_z = pick(a, r->kz), b_z = pick(b, r->kz), c_z = pick(c, r->kz);
-    float ax = pick(a, r->kx) - r->sx * a_z, ay = pick(a, r->ky) - r->sy * a_z;
-    float bx = pick(b, r->kx) - r->sx * b_z, by = pick(b, r->ky) - r->sy * b_z;
-    float cx = pick(c, r->kx) - r->sx * c_z, cy = pick(c, r->ky) - r->sy * c_z;
-    float u = cx * by - cy * bx;
-    float v = ax * cy - ay * cx;
-    float w = bx * ay - by * ax;
+    EdgeFunctions e = edge_functions(r, v0, v1, v2);
+    float u = e.u, v = e.v, w = e.w;
     if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return -1.0f;
     float det = u + v + w;
     if (det == 0.0f) return -1.0f;
-    float t = u * (r->sz * a_z) + v * (r->sz * b_z) + w * (r->sz * c_z);
+    float t = u * (r->sz * e.a_z) + v * (r->sz * e.b_z) + w * (r->sz * e.c_z);
     if (det > 0.0f ? !(t > 0.0f && t < t_max * det) : !(t < 0.0f && t > t_max * det)) return -1.0f;
     return t / det;
 }
 
 /* The barycentric weights (of v0, v1, v2) of the ray's hit with tri, a triangle it hits:
- * the watertight test's edge functions over their sum. Mirrored by
- * WatertightRay::barycentrics in src/intersect.rs. */
+ * the edge functions over their sum. Mirrored by WatertightRay::barycentrics in
+ * src/intersect.rs. */
 FORCE_INLINE float3 hit_barycentrics(const WatertightRay* r, const __global Triangle* tri) {
     const __global float4* row = (const __global float4*)tri;
-    float3 a = row[0].xyz - r->org, b = row[1].xyz - r->org, c = row[2].xyz - r->org;
-    float a_z = pick(a, r->kz), b_z = pick(b, r->kz), c_z = pick(c, r->kz);
-    float ax = pick(a, r->kx) - r->sx * a_z, ay = pick(a, r->ky) - r->sy * a_z;
-    float bx = pick(b, r->kx) - r->sx * b_z, by = pick(b, r->ky) - r->sy * b_z;
-    float cx = pick(c, r->kx) - r->sx * c_z, cy = pick(c, r->ky) - r->sy * c_z;
-    float u = cx * by - cy * bx;
-    float v = ax * cy - ay * cx;
-    float w = bx * ay - by * ax;
-    float det = u + v + w;
-    return det == 0.0f ? (float3)(1.0f, 0.0f, 0.0f) : (float3)(u / det, v / det, w / det);
+    EdgeFunctions e = edge_functions(r, row[0].xyz, row[1].xyz, row[2].xyz);
+    float det = e.u + e.v + e.w;
+    return det == 0.0f ? (float3)(1.0f, 0.0f, 0.0f) : (float3)(e.u / det, e.v / det, e.w / det);
 }
 
 /* 1 / dir per component: a zero component gives an infinite inverse. Where the origin lies

@@ -42,11 +42,16 @@ FORCE_INLINE bool mask_keeps(SURFACE_PARAMS, const WatertightRay* r, const __glo
 /* The unit shading normal at a primary hit, as the mesh orients it, for the single-hit
  * shade modes: the vertex normals interpolated (normal maps are left to the progressive
  * modes, so that the primary-ray kernel stays as lean as the traversal needs: the texture
- * code took registers from it and slowed the wide layouts on the H200 by 15%). */
+ * code took registers from it and slowed the wide layouts on the H200 by 15%). Even this
+ * much costs them 8 registers and 12% there, so it is compiled in only for scenes with
+ * vertex normals (SHADING_NORMALS; SurfaceFeatures in src/material/surface.rs). */
 FORCE_INLINE float3 shading_normal(SURFACE_PARAMS, const __global Triangle* tri, float3 org, float3 dir) {
     float3 v0 = load3(tri->v0);
     float3 cross_e = cross3(load3(tri->v1) - v0, load3(tri->v2) - v0);
     float3 front = cross_e / length3(cross_e);
+#ifndef SHADING_NORMALS
+    return front;
+#else
     if ((surface_flags & SURFACE_NORMALS) == 0u) return front;
     WatertightRay r = watertight_ray(org, dir);
     float3 w = hit_barycentrics(&r, tri);
@@ -57,6 +62,7 @@ FORCE_INLINE float3 shading_normal(SURFACE_PARAMS, const __global Triangle* tri,
     float3 mixed = LERP3(n0, n1, n2, w);
     float len = length3(mixed);
     return len > 0.0f ? mixed / len : front;
+#endif
 }
 
 /* What the integrator needs of a hit. */

@@ -5,11 +5,13 @@
  * parameters by name (src/device/tracer.rs; tests/layout.rs compares the two lists). */
 
 /* One primary ray per pixel of the band [row0, row_end), written to pitched images whose
- * row 0 is image row row0. */
+ * row 0 is image row row0; with barycentrics not null, also the hit's barycentric weights
+ * of the triangle's vertices 1 and 2 (0 for a miss), for version 2 of the hit records. */
 __kernel void trace_primary(SCENE_PARAMS, CAMERA_BAND_PARAMS,
                             int shade, float near, float far,
                             __global Hit* hits, uint hit_pitch,
-                            __global uint* colors, uint color_pitch) {
+                            __global uint* colors, uint color_pitch,
+                            __global float2* barycentrics, uint barycentric_pitch) {
     uint x = get_global_id(0), y = get_global_id(1);
     if (x >= width || y < row0 || y >= row_end) return;
     float3 org;
@@ -21,6 +23,14 @@ __kernel void trace_primary(SCENE_PARAMS, CAMERA_BAND_PARAMS,
         n = shading_normal(SURFACE, &tris[best], org, dir);
     }
     store_pixel(hits, hit_pitch, colors, color_pitch, x, y - row0, best, t, dir, tris, n, shade, near, far);
+    if (barycentrics != 0) {
+        float2 b = (float2)(0.0f);
+        if (best != MISS) {
+            WatertightRay r = watertight_ray(org, dir);
+            b = hit_barycentrics(&r, &tris[best]).yz;
+        }
+        barycentrics[(y - row0) * barycentric_pitch + x] = b;
+    }
 }
 
 /* Arbitrary rays: origin and t_max in rays[2i] (xyz, w), direction in rays[2i + 1]. With

@@ -148,6 +148,29 @@ impl WatertightRay {
         }
     }
 
+    /// The edge functions of the triangle `(v0, v1, v2)` for this ray (the unnormalised
+    /// barycentrics of `v0`, `v1`, `v2`) and the vertices' depths along it:
+    /// `edge_functions` in cl/intersect.cl.
+    fn edge_functions(&self, v0: [f32; 3], v1: [f32; 3], v2: [f32; 3]) -> EdgeFunctions {
+        let o = self.org;
+        let sub = |v: [f32; 3]| [v[0] - o[0], v[1] - o[1], v[2] - o[2]];
+        let (a, b, c) = (sub(v0), sub(v1), sub(v2));
+        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
+        let (a_z, b_z, c_z) = (a[kz], b[kz], c[kz]);
+        let ax = a[kx] - self.sx * a_z;
+        let ay = a[ky] - self.sy * a_z;
+        let bx = b[kx] - self.sx * b_z;
+        let by = b[ky] - self.sy * b_z;
+        let cx = c[kx] - self.sx * c_z;
+        let cy = c[ky] - self.sy * c_z;
+        EdgeFunctions {
+            u: cx * by - cy * bx,
+            v: ax * cy - ay * cx,
+            w: bx * ay - by * ax,
+            depths: [a_z, b_z, c_z],
+        }
+    }
+
     /// The ray parameter of the hit with the triangle `(v0, v1, v2)` if it lies in
     /// `(0, t_max)`; `None` for a miss, a hit no closer than `t_max`, or a zero-area triangle.
     pub(crate) fn intersect(
@@ -157,21 +180,7 @@ impl WatertightRay {
         v2: [f32; 3],
         t_max: f32,
     ) -> Option<f32> {
-        let o = self.org;
-        let a = [v0[0] - o[0], v0[1] - o[1], v0[2] - o[2]];
-        let b = [v1[0] - o[0], v1[1] - o[1], v1[2] - o[2]];
-        let c = [v2[0] - o[0], v2[1] - o[1], v2[2] - o[2]];
-        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
-        let (a_z, b_z, c_z) = (a[kz], b[kz], c[kz]);
-        let ax = a[kx] - self.sx * a_z;
-        let ay = a[ky] - self.sy * a_z;
-        let bx = b[kx] - self.sx * b_z;
-        let by = b[ky] - self.sy * b_z;
-        let cx = c[kx] - self.sx * c_z;
-        let cy = c[ky] - self.sy * c_z;
-        let u = cx * by - cy * bx;
-        let v = ax * cy - ay * cx;
-        let w = bx * ay - by * ax;
+        let EdgeFunctions { u, v, w, depths } = self.edge_functions(v0, v1, v2);
         if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
             return None;
         }
@@ -179,6 +188,7 @@ impl WatertightRay {
         if det == 0.0 {
             return None;
         }
+        let [a_z, b_z, c_z] = depths;
         let t = u * (self.sz * a_z) + v * (self.sz * b_z) + w * (self.sz * c_z);
         let inside = if det > 0.0 {
             t > 0.0 && t < t_max * det
@@ -191,20 +201,7 @@ impl WatertightRay {
     /// The barycentric weights (of `v0`, `v1`, `v2`) of this ray's hit with `tri`:
     /// `hit_barycentrics` in cl/intersect.cl.
     pub fn barycentrics(&self, tri: &Triangle) -> [f32; 3] {
-        let o = self.org;
-        let sub = |v: [f32; 3]| [v[0] - o[0], v[1] - o[1], v[2] - o[2]];
-        let (a, b, c) = (sub(tri.v0), sub(tri.v1), sub(tri.v2));
-        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
-        let (a_z, b_z, c_z) = (a[kz], b[kz], c[kz]);
-        let ax = a[kx] - self.sx * a_z;
-        let ay = a[ky] - self.sy * a_z;
-        let bx = b[kx] - self.sx * b_z;
-        let by = b[ky] - self.sy * b_z;
-        let cx = c[kx] - self.sx * c_z;
-        let cy = c[ky] - self.sy * c_z;
-        let u = cx * by - cy * bx;
-        let v = ax * cy - ay * cx;
-        let w = bx * ay - by * ax;
+        let EdgeFunctions { u, v, w, .. } = self.edge_functions(tri.v0, tri.v1, tri.v2);
         let det = u + v + w;
         if det == 0.0 {
             [1.0, 0.0, 0.0]
@@ -217,6 +214,14 @@ impl WatertightRay {
     pub fn intersect_stored(&self, tri: &Triangle, t_max: f32) -> Option<f32> {
         self.intersect(tri.v0, tri.v1, tri.v2, t_max)
     }
+}
+
+/// What [`WatertightRay::edge_functions`] computes.
+struct EdgeFunctions {
+    u: f32,
+    v: f32,
+    w: f32,
+    depths: [f32; 3],
 }
 
 /// Widens a box's exit distance so that rounding in the slab test never culls a box the

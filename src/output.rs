@@ -196,18 +196,80 @@ fn write_pfm(w: &mut impl Write, width: u32, pixels: &[[f32; 3]]) -> std::io::Re
     w.write_all(&bytes)
 }
 
-/// Writes the raw hit records: little-endian, row-major, 8 bytes a pixel (u32 triangle
-/// index, 0xFFFFFFFF for a miss, then f32 distance, +inf for a miss), no header.
-pub(crate) fn write_hits(frame: &Frame, path: &Path) -> Result<()> {
+/// The layout of the raw hit records (`--hits-format`). Both are little-endian,
+/// row-major, without a header.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum HitsFormat {
+    /// Version 1, 8 bytes a pixel: u32 triangle index (0xFFFFFFFF for a miss), f32
+    /// distance (+inf for a miss).
+    #[default]
+    V1,
+    /// Version 2, 16 bytes a pixel: version 1's fields, then the hit's barycentric weights
+    /// of the triangle's vertices 1 and 2 as two f32 (vertex 0's is 1 minus their sum; 0
+    /// and 0 for a miss).
+    V2,
+}
+
+impl HitsFormat {
+    /// Every format.
+    pub const ALL: [HitsFormat; 2] = [HitsFormat::V1, HitsFormat::V2];
+
+    /// The format's name, for `--hits-format`.
+    pub fn name(self) -> &'static str {
+        match self {
+            HitsFormat::V1 => "v1",
+            HitsFormat::V2 => "v2",
+        }
+    }
+
+    /// One line on the format, for `--help`.
+    pub fn about(self) -> &'static str {
+        match self {
+            HitsFormat::V1 => "8 bytes a pixel: u32 triangle, f32 distance",
+            HitsFormat::V2 => "16 bytes a pixel: v1, then f32 barycentrics of vertices 1 and 2",
+        }
+    }
+
+    /// Bytes per pixel.
+    pub fn record_bytes(self) -> usize {
+        match self {
+            HitsFormat::V1 => 8,
+            HitsFormat::V2 => 16,
+        }
+    }
+}
+
+impl std::str::FromStr for HitsFormat {
+    type Err = String;
+
+    /// The format [`HitsFormat::name`] names.
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        crate::error::by_name(s, &HitsFormat::ALL, HitsFormat::name, "hit record format")
+    }
+}
+
+/// Writes the raw hit records in `format` ([`HitsFormat`]). Version 2 needs the frame's
+/// barycentrics ([`crate::render::ShadeParams::with_barycentrics`]).
+pub(crate) fn write_hits(frame: &Frame, path: &Path, format: HitsFormat) -> Result<()> {
     check_output(path)?;
+    if format == HitsFormat::V2 && frame.barycentrics.len() != frame.hits.len() {
+        return Err(Error::Invalid(
+            "version 2 hit records need the frame's barycentrics".into(),
+        ));
+    }
     if path == Path::new(DEV_NULL) {
         return Ok(());
     }
     write_atomically(path, |w| {
-        let mut bytes = Vec::with_capacity(frame.hits.len() * 8);
-        for h in &frame.hits {
+        let mut bytes = Vec::with_capacity(frame.hits.len() * format.record_bytes());
+        for (i, h) in frame.hits.iter().enumerate() {
             bytes.extend_from_slice(&h.prim.to_le_bytes());
             bytes.extend_from_slice(&h.t.to_le_bytes());
+            if format == HitsFormat::V2 {
+                for b in frame.barycentrics[i] {
+                    bytes.extend_from_slice(&b.to_le_bytes());
+                }
+            }
         }
         w.write_all(&bytes).map_err(|e| Error::output(path, e))
     })
@@ -272,7 +334,7 @@ mod tests {
         let path = dir.path().join("h.bin");
         let mut f = Frame::new(2, 1);
         f.hits[1] = Hit { prim: 7, t: 2.5 };
-        write_hits(&f, &path).unwrap();
+        write_hits(&f, &path, HitsFormat::V1).unwrap();
         let bytes = std::fs::read(&path).unwrap();
         assert_eq!(bytes.len(), 16);
         assert_eq!(&bytes[0..4], &[0xFF; 4]);
@@ -282,6 +344,16 @@ mod tests {
         );
         assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 7);
         assert_eq!(f32::from_le_bytes(bytes[12..16].try_into().unwrap()), 2.5);
+        // Version 2 needs barycentrics, and appends them to each record.
+        assert!(write_hits(&f, &path, HitsFormat::V2).is_err());
+        f.barycentrics = vec![[0.0, 0.0], [0.25, 0.5]];
+        write_hits(&f, &path, HitsFormat::V2).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        assert_eq!(bytes.len(), 32);
+        assert_eq!(u32::from_le_bytes(bytes[16..20].try_into().unwrap()), 7);
+        let f32_at = |i: usize| f32::from_le_bytes(bytes[i..i + 4].try_into().unwrap());
+        assert_eq!((f32_at(8), f32_at(12)), (0.0, 0.0));
+        assert_eq!((f32_at(20), f32_at(24), f32_at(28)), (2.5, 0.25, 0.5));
     }
 
     #[test]

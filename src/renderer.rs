@@ -163,7 +163,7 @@ impl<'d> Renderer<'d> {
             };
             Surface::new(mesh, materials)
         });
-        let masks = surface.has_masks();
+        let features = surface.features();
         let (flat, mut bvh) = match built {
             Some((flat, stats)) => (Some(flat), Some(stats)),
             None => (None, None),
@@ -198,7 +198,7 @@ impl<'d> Renderer<'d> {
             (Method::ClBrute, _) => {
                 let device = device();
                 let program = timings.time("compile", || {
-                    ClTracer::compile_masked(device, None, sampling, masks)
+                    ClTracer::compile_for(device, None, sampling, features)
                 })?;
                 let triangles = all();
                 let emitters =
@@ -227,7 +227,7 @@ impl<'d> Renderer<'d> {
                     timings.time("lights", || Emitters::new(&laid.triangles, &materials.list));
                 let program = timings.time("compile", || {
                     let bvh = Some((laid.layout, laid.stack_size));
-                    ClTracer::compile_masked(device, bvh, sampling, masks)
+                    ClTracer::compile_for(device, bvh, sampling, features)
                 })?;
                 let tracer = timings.time("upload", || -> Result<ClTracer> {
                     let mut t = ClTracer::with_layout(device, &program, &laid)?;

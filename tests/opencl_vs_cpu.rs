@@ -120,7 +120,8 @@ fn reference(c: &Case) -> Frame {
     let tracer = cltrace::brute::BruteForce {
         triangles: triangles_in_order(&c.mesh, 0..c.mesh.triangle_count() as u32),
     };
-    let shade = ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds());
+    let shade =
+        ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds()).with_barycentrics(true);
     cpu::render(
         &tracer,
         &c.camera.pinhole(),
@@ -139,7 +140,9 @@ fn device_frame(
     options: &BuildOptions,
 ) -> Frame {
     let mut cl = tracer.prepare(device, &c.mesh, options);
-    let shade = ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds());
+    // With barycentrics: the hit records' version 2 is checked on every layout too.
+    let shade =
+        ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds()).with_barycentrics(true);
     cl.render(
         &c.camera.pinhole(),
         c.camera.width,
@@ -164,7 +167,8 @@ fn check(c: &Case, what: &str, reference: &Frame, frame: &Frame) {
 fn host_frames_match<T: ClosestHit>(what: &str, make: impl Fn(&Mesh) -> T) {
     for c in cases() {
         let reference = reference(&c);
-        let shade = ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds());
+        let shade =
+            ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds()).with_barycentrics(true);
         let frame = cpu::render(
             &make(&c.mesh),
             &c.camera.pinhole(),

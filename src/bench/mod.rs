@@ -297,7 +297,10 @@ fn run_into(
                         layout: Some(layout),
                         work_group: None,
                         sampling: false,
-                        crease_angle: None,
+                        // The protocol's primary ray is a closest-hit query, as the peers
+                        // measure it: flat shading, no vertex normals interpolated (which
+                        // cost the wide layouts 12% on the H200: docs/performance.md).
+                        crease_angle: Some(0.0),
                     };
                     let mut renderer = Renderer::prepare(
                         method,

@@ -12,7 +12,7 @@ use crate::error::Result;
 use crate::geometry::Aabb;
 use crate::input::scene_file::{RenderSettings, SceneDescription};
 use crate::mesh::Mesh;
-use crate::output;
+use crate::output::{self, HitsFormat};
 use crate::render::integrator::{Accumulation, Light, Lighting, Region, SampleSettings};
 use crate::render::{Frame, Hit, Method, Shade, ShadeParams, tone_map};
 use crate::renderer::{PrepareOptions, Renderer, TraceTimes};
@@ -62,6 +62,8 @@ pub struct RenderRequest {
     pub output: PathBuf,
     /// Where to write the raw hit records, if anywhere.
     pub hits: Option<PathBuf>,
+    /// The layout of the hit records.
+    pub hits_format: HitsFormat,
     /// Where to write a JSON summary of the run, if anywhere ([`RunSummary`]).
     pub json: Option<PathBuf>,
     /// `--device` (or `CLTRACE_DEVICE`), for OpenCL methods: one selector, or a list
@@ -448,7 +450,8 @@ fn render_with(
         ));
     }
     let sampling = sample_settings(&render, shade, &bounds)?;
-    let shade = ShadeParams::new(shade, &camera, &bounds);
+    let shade = ShadeParams::new(shade, &camera, &bounds)
+        .with_barycentrics(req.hits.is_some() && req.hits_format == HitsFormat::V2);
 
     // What `cltrace tune` found for each device: its layout unless one is asked for, and
     // its work-group shape.
@@ -685,7 +688,7 @@ fn render_with(
     timings.time("write", || -> Result<()> {
         output::write_image(&frame, &req.output)?;
         if let Some(hits) = &req.hits {
-            output::write_hits(&frame, hits)?;
+            output::write_hits(&frame, hits, req.hits_format)?;
         }
         Ok(())
     })?;

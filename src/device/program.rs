@@ -15,6 +15,7 @@ use ocl::core::ClDeviceIdPtr;
 use super::{CacheUse, ClDevice, first_line};
 use crate::bvh::Layout;
 use crate::error::{Error, Result};
+use crate::material::surface::SurfaceFeatures;
 
 /// Reads the kernel sources from this folder instead of the embedded copies (development).
 const KERNEL_DIR_VAR: &str = "CLTRACE_KERNEL_DIR";
@@ -252,6 +253,7 @@ pub struct Program {
     program: ocl::Program,
     layout: Option<Layout>,
     sampling: bool,
+    features: SurfaceFeatures,
     cache: Option<CacheUse>,
 }
 
@@ -259,6 +261,11 @@ impl Program {
     /// The BVH layout the kernels traverse; `None` for brute force.
     pub fn layout(&self) -> Option<Layout> {
         self.layout
+    }
+
+    /// What of a surface the kernels were compiled for.
+    pub fn features(&self) -> SurfaceFeatures {
+        self.features
     }
 
     /// Whether the program holds the progressive shade modes' kernels (cl/integrator.cl).
@@ -288,16 +295,16 @@ impl ClDevice {
         sampling: bool,
         extra_options: &str,
     ) -> Result<Program> {
-        self.compile_program_masked(bvh, sampling, false, extra_options)
+        self.compile_program_for(bvh, sampling, SurfaceFeatures::default(), extra_options)
     }
 
-    /// [`ClDevice::compile_program`] for a scene with cut-out masks when `masks`: its
-    /// traversals look each hit's mask up (`ALPHA_MASKS`, cl/traverse.cl).
-    pub fn compile_program_masked(
+    /// [`ClDevice::compile_program`] for a scene whose surface has `features` (cut-out
+    /// masks, vertex normals).
+    pub fn compile_program_for(
         &self,
         bvh: Option<(Layout, u32)>,
         sampling: bool,
-        masks: bool,
+        features: SurfaceFeatures,
         extra_options: &str,
     ) -> Result<Program> {
         let layout = bvh.map(|(layout, _)| layout);
@@ -305,8 +312,11 @@ impl ClDevice {
             Some((layout, stack_size)) => layout_defines(layout, stack_size),
             None => Vec::new(),
         };
-        if masks {
+        if features.masks {
             defines.push("ALPHA_MASKS".into());
+        }
+        if features.normals {
+            defines.push("SHADING_NORMALS".into());
         }
         let kernels = if sampling {
             "trace.cl + integrator.cl"
@@ -325,6 +335,7 @@ impl ClDevice {
                 program,
                 layout,
                 sampling,
+                features,
                 cache: None,
             });
         };
@@ -336,6 +347,7 @@ impl ClDevice {
                         program,
                         layout,
                         sampling,
+                        features,
                         cache: Some(CacheUse::Hit(entry.path)),
                     });
                 }
@@ -355,6 +367,7 @@ impl ClDevice {
             program,
             layout,
             sampling,
+            features,
             cache: Some(cache),
         })
     }
@@ -379,6 +392,7 @@ impl ClDevice {
                 std::ptr::null_mut(),
             )
         };
+        crate::interrupt::reclaim_handlers();
         match status {
             0 => Ok(ocl::Program::from(program)),
             status => Err(format!("the driver refused it (OpenCL status {status})")),
@@ -473,6 +487,7 @@ impl ClDevice {
                 std::ptr::null_mut(),
             )
         };
+        crate::interrupt::reclaim_handlers();
         let log = || match ocl::core::get_program_build_info(
             &program,
             self.info.device.as_core(),

@@ -5,7 +5,7 @@
 use std::time::Instant;
 
 use ocl::enums::ProfilingInfo;
-use ocl::prm::{Float4, Long4};
+use ocl::prm::{Float2, Float4, Long4};
 
 use super::{ClDevice, PitchedBuffer, Program};
 use crate::bvh::{Bin32Bvh, DeviceLayout, Layout};
@@ -14,7 +14,7 @@ use crate::error::{Error, Result};
 use crate::geometry::Ray;
 use crate::intersect::Triangle;
 use crate::material::Material;
-use crate::material::surface::Surface;
+use crate::material::surface::{Surface, SurfaceFeatures};
 use crate::material::texture::TextureInfo;
 use crate::render::integrator::{Accumulation, Emitters, Light, Lighting, Region, SampleSettings};
 use crate::render::{Frame, Hit, ShadeParams};
@@ -266,6 +266,8 @@ kernel_params! {
         hit_pitch: u32,
         colors: Option<&'a ocl::Buffer<u32>>,
         color_pitch: u32,
+        barycentrics: Option<&'a ocl::Buffer<Float2>>,
+        barycentric_pitch: u32,
     }
 }
 
@@ -468,14 +470,14 @@ impl<'d> ClTracer<'d> {
         device.compile_program(bvh, sampling, "")
     }
 
-    /// [`ClTracer::compile`] for a scene that has cut-out masks when `masks`.
-    pub fn compile_masked(
+    /// [`ClTracer::compile`] for a scene whose surface has `features`.
+    pub fn compile_for(
         device: &'d ClDevice,
         bvh: Option<(Layout, u32)>,
         sampling: bool,
-        masks: bool,
+        features: SurfaceFeatures,
     ) -> Result<Program> {
-        device.compile_program_masked(bvh, sampling, masks, "")
+        device.compile_program_for(bvh, sampling, features, "")
     }
 
     /// Uploads the triangles (in file order) for the brute-force kernels.
@@ -641,10 +643,16 @@ impl<'d> ClTracer<'d> {
     }
 
     /// Uploads the surface (materials, vertex data, textures) the kernels shade with,
-    /// within the device's memory, after checking that it fits. The program must have been
-    /// compiled with masks if the surface has any.
+    /// within the device's memory, after checking that it fits and that the program was
+    /// compiled for what the surface has ([`Surface::features`]).
     pub(crate) fn set_surface(&mut self, surface: &Surface) -> Result<()> {
         let device = self.device;
+        let (needs, has) = (surface.features(), self.program.features());
+        if (needs.masks && !has.masks) || (needs.normals && !has.normals) {
+            return Err(Error::Invalid(format!(
+                "the program was compiled for a surface with {has:?}, this one has {needs:?}"
+            )));
+        }
         let textures = surface.textures.bytes();
         check_scene_memory(
             device,
@@ -962,6 +970,10 @@ impl<'d> ClTracer<'d> {
         let band_capacity = capacity::<Hit>(device, self.image_budget, w, h);
         let hits = PitchedBuffer::<Hit>::new(device, w, band_capacity)?;
         let colors = PitchedBuffer::<u32>::new(device, w, band_capacity)?;
+        let barycentrics = match shade.barycentrics {
+            true => Some(PitchedBuffer::<Float2>::new(device, w, band_capacity)?),
+            false => None,
+        };
 
         let k = &self.primary;
         // The band (row0, row_end) changes from launch to launch.
@@ -974,11 +986,14 @@ impl<'d> ClTracer<'d> {
             hit_pitch: hits.pitch as u32,
             colors: Some(&colors.buffer),
             color_pitch: colors.pitch as u32,
+            barycentrics: barycentrics.as_ref().map(|b| &b.buffer),
+            barycentric_pitch: barycentrics.as_ref().map_or(0, |b| b.pitch as u32),
         };
         self.scene.clear_status(device)?;
 
         let local = self.local;
         let mut frame = Frame::new(width, height);
+        let mut bary = vec![Float2::zero(); if barycentrics.is_some() { w * h } else { 0 }];
         let mut times = DeviceTimes::default();
         let mut bar: Option<Progress> = None;
         let mut y0 = 0usize;
@@ -1003,6 +1018,9 @@ impl<'d> ClTracer<'d> {
             let start = Instant::now();
             hits.read_rows(device, rows, &mut frame.hits[y0 * w..])?;
             colors.read_rows(device, rows, &mut frame.colors[y0 * w..])?;
+            if let Some(b) = &barycentrics {
+                b.read_rows(device, rows, &mut bary[y0 * w..])?;
+            }
             times.read_back_ms += start.elapsed().as_secs_f64() * 1e3;
 
             y0 += rows;
@@ -1023,6 +1041,7 @@ impl<'d> ClTracer<'d> {
             b.finish();
         }
         self.scene.check_status(device)?;
+        frame.barycentrics = bary.iter().map(|b| [b[0], b[1]]).collect();
         Ok((frame, times))
     }
 

@@ -12,6 +12,7 @@ use cltrace::camera::{CameraSettings, Projection, View};
 use cltrace::commands::frames::{FrameRange, Frames};
 use cltrace::commands::render::RenderRequest;
 use cltrace::input::scene_file::RenderSettings;
+use cltrace::output::HitsFormat;
 use cltrace::render::integrator::{Region, parse_sample_range};
 use cltrace::render::{Method, Shade};
 use cltrace::report::Verbosity;
@@ -54,9 +55,14 @@ pub struct RenderArgs {
     #[command(flatten)]
     settings: SettingsArgs,
 
-    /// Also write the raw per-pixel hit records here (8 bytes a pixel: u32 triangle, f32 distance)
+    /// Also write the raw per-pixel hit records here (8 bytes a pixel: u32 triangle, f32
+    /// distance; --hits-format v2 adds the barycentrics)
     #[arg(long, value_name = "FILE")]
     hits: Option<PathBuf>,
+
+    /// The layout of --hits's records
+    #[arg(long, value_name = "FORMAT", value_parser = choice::<HitsFormat>(), requires = "hits", default_value = "v1")]
+    hits_format: HitsFormat,
 
     /// Also write a JSON summary of the run here: version, device, layout, work-group,
     /// samples, rays, every stage's time, wall time, the files written
@@ -240,6 +246,7 @@ impl RenderArgs {
             render: self.settings.into(),
             output: self.output,
             hits: self.hits,
+            hits_format: self.hits_format,
             json: self.json,
             device: self.device,
             region: self.region,

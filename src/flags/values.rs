@@ -10,6 +10,7 @@ use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use cltrace::bench::RayKind;
 use cltrace::bvh::{Builder, Layout};
 use cltrace::camera::{Projection, View};
+use cltrace::output::HitsFormat;
 use cltrace::render::{Method, Shade};
 
 /// The value of a whole-number flag (a size, a count, a seed). Each flag's own range is
@@ -47,7 +48,9 @@ macro_rules! choices {
     )*};
 }
 
-choices!(Builder, Layout, Method, Shade, RayKind, View, Projection);
+choices!(
+    Builder, Layout, Method, Shade, RayKind, View, Projection, HitsFormat
+);
 
 /// The value parser of a [`Choice`]: `--help` lists the names with their lines, and a value
 /// that is none of them (or not UTF-8) is an "invalid value" error listing them, as for a

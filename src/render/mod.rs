@@ -199,6 +199,10 @@ pub struct Frame {
     pub hits: Vec<Hit>,
     /// One RGBA8 colour per pixel, red in the low byte.
     pub colors: Vec<u32>,
+    /// Where the frame was asked for them ([`ShadeParams::with_barycentrics`]), one per
+    /// pixel: the hit's barycentric weights of its triangle's vertices 1 and 2 (vertex 0's
+    /// is 1 minus their sum), `[0, 0]` for a miss; otherwise empty.
+    pub barycentrics: Vec<[f32; 2]>,
     /// Linear radiance per pixel, for the progressive shade modes (the colours are then its
     /// tone-mapped form).
     pub(crate) radiance: Option<Vec<[f32; 3]>>,
@@ -212,6 +216,7 @@ impl Frame {
             height,
             hits: vec![Hit::NONE; n],
             colors: vec![0; n],
+            barycentrics: Vec::new(),
             radiance: None,
         }
     }

@@ -14,6 +14,9 @@ pub struct ShadeParams {
     pub(crate) shade: Shade,
     pub(crate) near: f32,
     pub(crate) far: f32,
+    /// Whether the frame's hits carry barycentrics ([`super::Frame::barycentrics`]): what
+    /// version 2 of the hit records stores.
+    pub(crate) barycentrics: bool,
 }
 
 impl ShadeParams {
@@ -25,7 +28,20 @@ impl ShadeParams {
         let distance = (bounds.center() - camera.eye).length();
         let near = (distance - radius).max(0.0);
         let far = (distance + radius).max(near * 1.0001 + f32::MIN_POSITIVE);
-        ShadeParams { shade, near, far }
+        ShadeParams {
+            shade,
+            near,
+            far,
+            barycentrics: false,
+        }
+    }
+
+    /// The same, with the hits' barycentrics recorded in the frame.
+    pub fn with_barycentrics(self, barycentrics: bool) -> Self {
+        ShadeParams {
+            barycentrics,
+            ..self
+        }
     }
 
     /// The packed RGBA colour of a hit with unit (shading) normal `n` at `distance` along

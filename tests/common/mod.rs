@@ -138,6 +138,11 @@ pub fn shared_scene(name: &str) -> Option<PathBuf> {
 /// Relative distance within which two different triangles count as a tie.
 pub const TIE: f32 = 1e-5;
 
+/// How far a kernel's barycentrics may be from the host's: well above the few ulp near 1
+/// (6e-8 each) that the division may cost, well below what a different triangle or a
+/// different point on it would give.
+pub const BARYCENTRIC_TOLERANCE: f32 = 1e-5;
+
 /// Checks `frame` against the `reference` frame pixel by pixel: the same triangle, or a tie
 /// (both triangles really hit within [`TIE`] relative distance of each other). `triangles`
 /// are the mesh's triangles in file order, to re-check ties independently. Returns how many
@@ -152,12 +157,31 @@ pub fn compare_frames(
         (reference.width, reference.height),
         (frame.width, frame.height)
     );
+    if !reference.barycentrics.is_empty() {
+        assert_eq!(
+            frame.barycentrics.len(),
+            reference.barycentrics.len(),
+            "barycentrics"
+        );
+    }
     let mut ties = 0;
     for y in 0..frame.height {
         for x in 0..frame.width {
             let (a, b) = (reference.hit(x, y), frame.hit(x, y));
             let close = |s: f32, t: f32| (s - t).abs() <= TIE * s.abs().max(t.abs());
             if a.prim == b.prim {
+                let i = (y * frame.width + x) as usize;
+                // Barycentrics, where both frames have them, agree to a few ulp of [0, 1]
+                // (a division, which OpenCL lets be 2.5 ulp off).
+                let (p, q) = (reference.barycentrics.get(i), frame.barycentrics.get(i));
+                if let (Some(p), Some(q)) = (p, q)
+                    && (p[0] - q[0]).abs().max((p[1] - q[1]).abs()) > BARYCENTRIC_TOLERANCE
+                {
+                    return Err(format!(
+                        "pixel ({x}, {y}): triangle {} at barycentrics {p:?} vs {q:?}",
+                        a.prim
+                    ));
+                }
                 if a.is_miss() || close(a.t, b.t) {
                     continue;
                 }
