@@ -18,7 +18,8 @@
 
 /* A triangle as the intersector reads it: three corners, each padded to 16 bytes so that a
  * corner is one vector load. `prim` is the triangle's index in file order, `material` its
- * index into the Material array, `flags` TRIANGLE_MASKED for a cut-out material. */
+ * index into the Material array, `flags` TRIANGLE_MASKED for a cut-out material and
+ * TRIANGLE_TWO_SIDED for an emitter shining from both faces. */
 typedef struct {
     float v0[3]; uint prim;
     float v1[3]; uint material;

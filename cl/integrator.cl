@@ -9,11 +9,13 @@
 /* jittered_ray, the camera ray of a sample, is in sampling.cl (so the probe program can
  * compare it with the host's). */
 
-/* The unit geometric normal of tri, turned to face dir's origin side. */
-FORCE_INLINE float3 facing_normal(const __global Triangle* tri, float3 dir) {
+/* The unit normal along which emitter tri shines towards a point in direction -dir from
+ * it: its front face's (the winding's), or for a two-sided emitter the one turned to face
+ * dir's origin side. */
+FORCE_INLINE float3 emitting_normal(const __global Triangle* tri, float3 dir) {
     float3 v0 = load3(tri->v0);
     float3 n = normalize(cross(load3(tri->v1) - v0, load3(tri->v2) - v0));
-    return dot(n, dir) > 0.0f ? -n : n;
+    return (tri->flags & TRIANGLE_TWO_SIDED) != 0u && dot(n, dir) > 0.0f ? -n : n;
 }
 
 /* The sky of scenes without emitters: white at the horizon, blue overhead, grey below. */
@@ -169,7 +171,7 @@ __kernel void sample_path(SAMPLE_PARAMS) {
             float d2 = dot(w, w);
             float3 l = w / sqrt(d2);
             float cos_here = dot(n, l);
-            float cos_there = dot(facing_normal(e, l), -l);
+            float cos_there = dot(emitting_normal(e, l), -l);
             if (cos_here > 0.0f && cos_there > 0.0f && dot3(l, sp.ng) > 0.0f) {
                 count += 1;
                 if (!occluded(SCENE, origin, l, sqrt(d2) * (1.0f - 1e-4f))) {

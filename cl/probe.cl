@@ -95,6 +95,7 @@ __kernel void probe_constants(__global uint* out) {
     out[i++] = SURFACE_UVS;
     out[i++] = SURFACE_COLORS;
     out[i++] = TRIANGLE_MASKED;
+    out[i++] = TRIANGLE_TWO_SIDED;
     out[i++] = as_uint(BOUNCE_CONE_SPREAD);
 }
 

@@ -98,7 +98,9 @@ FORCE_INLINE SurfacePoint surface_point(SURFACE_PARAMS, const __global Triangle*
     bool back = dot3(front, dir) > 0.0f;
     s.ng = back ? -front : front;
     s.albedo = load3(m->albedo);
-    s.emission = load3(m->emission);
+    /* An emitter shines from its front face only, unless two-sided (TRIANGLE_TWO_SIDED). */
+    bool shines = !back || (tri->flags & TRIANGLE_TWO_SIDED) != 0u;
+    s.emission = shines ? load3(m->emission) : (float3)(0.0f);
     uint prim = tri->prim;
     if (surface_flags == 0u) {
         /* Flat and untextured: the plain hit point, as before shading data existed. */
@@ -156,7 +158,7 @@ FORCE_INLINE SurfacePoint surface_point(SURFACE_PARAMS, const __global Triangle*
         if (m->base_texture != NO_TEXTURE) {
             s.albedo = s.albedo * sample_footprint(SURFACE, m->base_texture, uv, lod_base).xyz;
         }
-        if (m->emission_texture != NO_TEXTURE) {
+        if (m->emission_texture != NO_TEXTURE && shines) {
             s.emission = s.emission * sample_footprint(SURFACE, m->emission_texture, uv, lod_base).xyz;
         }
     }

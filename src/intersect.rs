@@ -31,7 +31,8 @@ pub struct Triangle {
     pub material: u32,
     /// Third corner; equal to `v0` for a zero-area triangle.
     pub v2: [f32; 3],
-    /// [`TRIANGLE_MASKED`] for a triangle whose material has a cut-out mask, else 0.
+    /// Bits: [`TRIANGLE_MASKED`] for a triangle whose material has a cut-out mask,
+    /// [`TRIANGLE_TWO_SIDED`] for an emitter that shines from both faces.
     pub flags: u32,
 }
 
@@ -55,11 +56,26 @@ impl Triangle {
             flags: 0,
         }
     }
+
+    /// The unit geometric normal, turned to face `dir`'s origin side.
+    pub(crate) fn facing_normal(&self, dir: glam::Vec3) -> glam::Vec3 {
+        let v0 = glam::Vec3::from(self.v0);
+        let n = (glam::Vec3::from(self.v1) - v0)
+            .cross(glam::Vec3::from(self.v2) - v0)
+            .normalize();
+        if n.dot(dir) > 0.0 { -n } else { n }
+    }
 }
 
 /// [`Triangle::flags`] bit: the material has a cut-out mask, so a hit counts only where
 /// the mask lets it (`mask_keeps` in cl/surface.cl).
 pub const TRIANGLE_MASKED: u32 = 1;
+
+/// [`Triangle::flags`] bit: an emitter that shines from both faces; without it an emitter
+/// shines only from its front face, the side its winding's normal points to, as the area
+/// lights of pbrt, Mitsuba and LuxCoreRender do (`surface_point` and `emitting_normal` in
+/// the kernels).
+pub const TRIANGLE_TWO_SIDED: u32 = 2;
 
 /// The mesh's triangles in the order given (file order for brute force, leaf order for a
 /// BVH), each carrying its file-order index.

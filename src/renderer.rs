@@ -59,6 +59,8 @@ pub struct PrepareOptions {
     /// The crease angle of smooth normals, in degrees, for triangle corners without a
     /// normal (0: faceted); `None` takes [`DEFAULT_CREASE_ANGLE`].
     pub crease_angle: Option<f32>,
+    /// Emitters shine from both faces, not only from the front one (their winding's side).
+    pub two_sided_lights: bool,
 }
 
 /// What tracing cost.
@@ -82,7 +84,7 @@ impl<'d> Renderer<'d> {
         device: Option<&'d ClDevice>,
         timings: &mut Timings,
     ) -> Result<Self> {
-        let built = Self::build(method, mesh, materials, &options.build, timings);
+        let built = Self::build(method, mesh, materials, options, timings);
         Self::prepare_built(method, mesh, materials, options, built, device, timings)
     }
 
@@ -97,7 +99,7 @@ impl<'d> Renderer<'d> {
         devices: &[&'d ClDevice],
         timings: &mut Timings,
     ) -> Result<Vec<Self>> {
-        let built = Self::build(method, mesh, materials, &options[0].build, timings);
+        let built = Self::build(method, mesh, materials, &options[0], timings);
         devices
             .iter()
             .zip(options)
@@ -121,20 +123,20 @@ impl<'d> Renderer<'d> {
         method: Method,
         mesh: &Mesh,
         materials: &Materials,
-        build: &BuildOptions,
+        options: &PrepareOptions,
         timings: &mut Timings,
     ) -> Option<(Bin32Bvh, BvhStats)> {
         if !method.uses_bvh() {
             return None;
         }
         let (bvh, stats) = timings.time("build", || {
-            let bvh = Bvh::build(mesh, build);
+            let bvh = Bvh::build(mesh, &options.build);
             let stats = bvh.stats();
             (bvh, stats)
         });
         let flat = timings.time("layout", || {
             let mut flat = Bin32Bvh::new(bvh, mesh);
-            materials.assign(&mut flat.triangles);
+            materials.assign(&mut flat.triangles, options.two_sided_lights);
             flat
         });
         Some((flat, stats))
@@ -170,7 +172,7 @@ impl<'d> Renderer<'d> {
         };
         let all = || {
             let mut t = triangles_in_order(mesh, 0..mesh.triangle_count() as u32);
-            materials.assign(&mut t);
+            materials.assign(&mut t, options.two_sided_lights);
             t
         };
         let bytes = |nodes: usize, tris: usize| {

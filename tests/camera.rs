@@ -528,6 +528,7 @@ fn shadow_samples(
         work_group: None,
         sampling: true,
         crease_angle: None,
+        two_sided_lights: false,
     };
     let mut renderer = Renderer::prepare(
         method,

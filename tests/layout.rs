@@ -169,6 +169,7 @@ fn device_constants_match_the_rust_constants() {
         ("SURFACE_UVS", surface::SURFACE_UVS),
         ("SURFACE_COLORS", surface::SURFACE_COLORS),
         ("TRIANGLE_MASKED", cltrace::intersect::TRIANGLE_MASKED),
+        ("TRIANGLE_TWO_SIDED", cltrace::intersect::TRIANGLE_TWO_SIDED),
         ("BOUNCE_CONE_SPREAD", surface::BOUNCE_CONE_SPREAD.to_bits()),
     ];
     // The probe reports every constant the host defines for the kernels, none left out.

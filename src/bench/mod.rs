@@ -102,7 +102,6 @@ pub(crate) fn tile_order(width: u32, height: u32, tile: u32) -> impl Iterator<It
 /// under "Diffuse rays").
 pub(crate) fn diffuse_rays(mesh: &Mesh, camera: &Camera) -> Vec<Ray> {
     use crate::intersect::ClosestHit;
-    use crate::render::integrator::facing_normal;
     use crate::render::sampling::{Sampler, cosine_direction};
     use rayon::prelude::*;
     let bvh = Bin32Bvh::new(Bvh::build(mesh, &BuildOptions::default()), mesh);
@@ -116,7 +115,7 @@ pub(crate) fn diffuse_rays(mesh: &Mesh, camera: &Camera) -> Vec<Ray> {
         .filter_map(|pixel| {
             let ray = pinhole.ray(pixel % width, pixel / width);
             let (i, t) = bvh.closest_hit(&ray, f32::INFINITY)?;
-            let n = facing_normal(&bvh.triangles[i], ray.dir);
+            let n = bvh.triangles[i].facing_normal(ray.dir);
             let s = Sampler::new(0, pixel, 0);
             Some(Ray::new(
                 ray.at(t) + n * offset,
@@ -301,6 +300,7 @@ fn run_into(
                         // measure it: flat shading, no vertex normals interpolated (which
                         // cost the wide layouts 12% on the H200: docs/performance.md).
                         crease_angle: Some(0.0),
+                        two_sided_lights: false,
                     };
                     let mut renderer = Renderer::prepare(
                         method,

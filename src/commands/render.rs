@@ -468,6 +468,7 @@ fn render_with(
         work_group: tuned.map(|t| t.work_group),
         sampling: sampling.is_some(),
         crease_angle: render.crease_angle,
+        two_sided_lights: render.two_sided_lights.unwrap_or(false),
     };
     let tuned = device.and_then(tuned_for);
     let mut renderers = match devices.len() {
@@ -659,6 +660,7 @@ fn render_with(
                 shade.shade,
                 &sampling,
                 render.crease_angle,
+                render.two_sided_lights.unwrap_or(false),
             ),
             accumulation: acc,
             samples,
@@ -774,6 +776,7 @@ fn part_settings(
     shade: Shade,
     sampling: &Option<(SampleSettings, u32)>,
     crease_angle: Option<f32>,
+    two_sided_lights: bool,
 ) -> String {
     let mut bytes: Vec<u8> = Vec::new();
     let floats = mesh
@@ -819,6 +822,10 @@ fn part_settings(
             crease_angle.unwrap_or(crate::mesh::DEFAULT_CREASE_ANGLE)
         ),
     ];
+    // Added only when set, so that parts written before the option still merge.
+    if two_sided_lights {
+        lines.push("two_sided_lights=true".into());
+    }
     if let Some((s, _)) = sampling {
         lines.push(format!("lighting={:?}", s.lighting));
         lines.push(format!("offset={:?}", s.offset));

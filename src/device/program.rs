@@ -122,6 +122,10 @@ pub fn shared_constants() -> Vec<(&'static str, Constant)> {
         ("SURFACE_UVS", U32(surface::SURFACE_UVS)),
         ("SURFACE_COLORS", U32(surface::SURFACE_COLORS)),
         ("TRIANGLE_MASKED", U32(crate::intersect::TRIANGLE_MASKED)),
+        (
+            "TRIANGLE_TWO_SIDED",
+            U32(crate::intersect::TRIANGLE_TWO_SIDED),
+        ),
         ("BOUNCE_CONE_SPREAD", F32(surface::BOUNCE_CONE_SPREAD)),
     ]
 }

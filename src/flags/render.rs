@@ -219,6 +219,10 @@ struct SettingsArgs {
 
     #[arg(long, value_name = "DEGREES", help = help::crease_angle())]
     crease_angle: Option<f32>,
+
+    #[arg(long, value_name = "BOOL", num_args = 0..=1, default_missing_value = "true",
+          help = help::two_sided_lights())]
+    two_sided_lights: Option<bool>,
 }
 
 impl From<SettingsArgs> for RenderSettings {
@@ -234,6 +238,7 @@ impl From<SettingsArgs> for RenderSettings {
             max_bounces: a.max_bounces,
             light: a.light,
             crease_angle: a.crease_angle,
+            two_sided_lights: a.two_sided_lights,
         }
     }
 }
@@ -374,6 +379,15 @@ mod help {
              shade as one curved surface, sharper edges stay sharp; 0 renders faceted \
              {}",
             or_scene(format_args!("{DEFAULT_CREASE_ANGLE} degrees"))
+        )
+    }
+
+    pub fn two_sided_lights() -> String {
+        format!(
+            "Emitting surfaces shine from both faces; without it they shine only from their \
+             front face, the side from which their corners run counter-clockwise, as in pbrt, \
+             Mitsuba and LuxCoreRender {}",
+            or_scene("false")
         )
     }
 

@@ -23,6 +23,7 @@
 //! method = "cl-bvh"
 //! shade = "path"               # normal, depth, lambert, ao, shadow, path
 //! spp = 64                     # samples per pixel of ao, shadow and path
+//! two_sided_lights = false     # emitters shine from their front face only (default)
 //! ```
 //!
 //! The camera may be animated, for `cltrace render --frames` ([`crate::animation`]), by
@@ -172,6 +173,9 @@ pub struct RenderSettings {
     /// Smooth normals for corners the mesh gives none: the crease angle in degrees, 0 to
     /// 180 (0: faceted).
     pub crease_angle: Option<f32>,
+    /// Emitters shine from both faces; without it (the default) only from the front face,
+    /// the side their winding's normal points to.
+    pub two_sided_lights: Option<bool>,
 }
 
 /// A scene file's `light`, checked as it is read, so that a bad one is an error at its
@@ -197,6 +201,7 @@ impl RenderSettings {
             max_bounces: self.max_bounces.or(base.max_bounces),
             light: self.light.or(base.light),
             crease_angle: self.crease_angle.or(base.crease_angle),
+            two_sided_lights: self.two_sided_lights.or(base.two_sided_lights),
         }
     }
 }

@@ -135,14 +135,19 @@ impl Default for Materials {
 
 impl Materials {
     /// Stores each triangle's material index (looked up by its file-order index), and
-    /// marks the triangles of masked materials.
-    pub(crate) fn assign(&self, triangles: &mut [Triangle]) {
+    /// marks the triangles of masked materials, and the emitters when `two_sided_lights`.
+    pub(crate) fn assign(&self, triangles: &mut [Triangle], two_sided_lights: bool) {
+        use crate::intersect::{TRIANGLE_MASKED, TRIANGLE_TWO_SIDED};
         for t in triangles {
             t.material = self.index_of(t.prim as usize);
-            t.flags = match self.list[t.material as usize].is_masked() {
-                true => crate::intersect::TRIANGLE_MASKED,
-                false => 0,
-            };
+            let m = &self.list[t.material as usize];
+            t.flags = 0;
+            if m.is_masked() {
+                t.flags |= TRIANGLE_MASKED;
+            }
+            if two_sided_lights && m.emits() {
+                t.flags |= TRIANGLE_TWO_SIDED;
+            }
         }
     }
 

@@ -7,7 +7,7 @@ use glam::{Vec2, Vec3};
 
 use super::texture::DeviceTextures;
 use super::{Material, Materials, NO_TEXTURE};
-use crate::intersect::{TRIANGLE_MASKED, Triangle, WatertightRay};
+use crate::intersect::{TRIANGLE_MASKED, TRIANGLE_TWO_SIDED, Triangle, WatertightRay};
 use crate::mesh::Mesh;
 
 /// [`Surface::flags`] bit: the vertices have normals.
@@ -207,7 +207,13 @@ impl Surface {
         let back = dot3(front, dir) > 0.0;
         let ng = if back { -front } else { front };
         let mut albedo = Vec3::from(m.albedo);
-        let mut emission = Vec3::from(m.emission);
+        // An emitter shines from its front face only, unless two-sided.
+        let shines = !back || tri.flags & TRIANGLE_TWO_SIDED != 0;
+        let mut emission = if shines {
+            Vec3::from(m.emission)
+        } else {
+            Vec3::ZERO
+        };
         if self.flags == 0 {
             return SurfacePoint {
                 origin: org + dir * t + ng * offset,
@@ -269,7 +275,7 @@ impl Surface {
             if m.base_texture != NO_TEXTURE {
                 albedo *= self.footprint(m.base_texture, uv, lod_base);
             }
-            if m.emission_texture != NO_TEXTURE {
+            if m.emission_texture != NO_TEXTURE && shines {
                 emission *= self.footprint(m.emission_texture, uv, lod_base);
             }
         }

@@ -15,7 +15,7 @@ use super::sampling::{
 use crate::camera::Pinhole;
 use crate::geometry::Ray;
 use crate::intersect::ClosestHit;
-use crate::intersect::Triangle;
+use crate::intersect::{TRIANGLE_TWO_SIDED, Triangle};
 use crate::material::Material;
 use crate::material::surface::{BOUNCE_CONE_SPREAD, Surface};
 
@@ -211,13 +211,19 @@ pub fn sample_ray(camera: &Pinhole, (x, y, width): (u32, u32, u32), seed: u32, s
     jittered_ray(camera, x, y, &Sampler::new(seed, y * width + x, sample))
 }
 
-/// The unit geometric normal of `t`, turned to face `dir`'s origin side.
-pub(crate) fn facing_normal(t: &Triangle, dir: Vec3) -> Vec3 {
+/// `emitting_normal` in cl/integrator.cl: the unit normal along which emitter `t` shines
+/// towards a point in direction `-dir` from it: its front face's, or for a two-sided
+/// emitter ([`TRIANGLE_TWO_SIDED`]) the one facing `dir`'s origin side.
+pub(crate) fn emitting_normal(t: &Triangle, dir: Vec3) -> Vec3 {
     let v0 = Vec3::from(t.v0);
     let n = (Vec3::from(t.v1) - v0)
         .cross(Vec3::from(t.v2) - v0)
         .normalize();
-    if n.dot(dir) > 0.0 { -n } else { n }
+    if t.flags & TRIANGLE_TWO_SIDED != 0 && n.dot(dir) > 0.0 {
+        -n
+    } else {
+        n
+    }
 }
 
 /// The closest hit of `ray` in `(0, t_max)` (or any hit) that `surface`'s cut-out masks
@@ -342,7 +348,7 @@ pub(crate) fn sample_pixel(
                     let d2 = w.length_squared();
                     let l = w / d2.sqrt();
                     let cos_here = n.dot(l);
-                    let cos_there = facing_normal(e, l).dot(-l);
+                    let cos_there = emitting_normal(e, l).dot(-l);
                     if cos_here > 0.0 && cos_there > 0.0 && above(l) {
                         rays += 1;
                         if !occluded(&Ray::new(origin, l), d2.sqrt() * (1.0 - 1e-4)) {
