@@ -204,6 +204,11 @@ def fmt(x):
     return repr(float(x))
 
 
+def fmt_obj(x):
+    """A coordinate in an OBJ file: 7 significant digits (both renderers read the same file)."""
+    return f"{float(x):.7g}"
+
+
 def write_png(path, pixels):
     """An 8-bit PNG, grey (H x W) or RGB (H x W x 3), unfiltered rows."""
     pixels = np.ascontiguousarray(pixels, dtype=np.uint8)
@@ -298,11 +303,11 @@ def write_inputs(scene, out, width, height, spp, seed=0):
             f.write(f"o {o['name']}\nusemtl {o['name']}\n")
             for t in o["tris"]:
                 for p in t:
-                    f.write("v " + " ".join(fmt(x) for x in p) + "\n")
+                    f.write("v " + " ".join(fmt_obj(x) for x in p) + "\n")
             if o["uvs"]:
                 for t in o["uvs"]:
                     for uv in t:
-                        f.write("vt " + " ".join(fmt(x) for x in uv) + "\n")
+                        f.write("vt " + " ".join(fmt_obj(x) for x in uv) + "\n")
             for k in range(len(o["tris"])):
                 i = 3 * k + 1
                 if o["uvs"]:
