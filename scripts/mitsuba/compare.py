@@ -11,17 +11,15 @@ OBJ files, with a bsdf and an area emitter per object from the same materials.
     compare.py reference --out DIR [--spp N] [--size WxH] inputs + Mitsuba references
     compare.py check     --cltrace BIN --refs DIR [--spp N]
 
-`reference` needs Mitsuba (scripts/mitsuba/setup.sh installs it); `scenes` and `check` need
-only numpy, and `check` reads the EXR files through Mitsuba's Bitmap when it is installed,
-else through its own reader of the files it knows (see read_exr). The tolerance and the
-correspondence of settings are in scripts/mitsuba/README.md.
+`scenes` needs only numpy; `reference` needs Mitsuba (scripts/mitsuba/setup.sh installs it),
+and so does `check`, which reads the EXR files through Mitsuba's Bitmap. The tolerance and
+the correspondence of settings are in scripts/mitsuba/README.md.
 """
 
 import argparse
 import json
 import math
 import os
-import shutil
 import struct
 import subprocess
 import sys
