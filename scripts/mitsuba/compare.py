@@ -582,7 +582,8 @@ def cmd_check(args):
                 cmd = [args.cltrace, "render", os.path.join(d, info["cltrace_scene"]), "--shade", "path",
                        "--spp", str(half), "--seed", str(seed), "--max-bounces", str(info["max_bounces"]),
                        "--width", str(w), "--height", str(h), "-o", path, "-q"]
-                subprocess.run(cmd, check=True)
+                if subprocess.run(cmd).returncode != 0:
+                    sys.exit(f"compare.py: cltrace failed on {info['scene']}: {' '.join(cmd)}")
                 cl.append(read_exr(path))
             took = time.time() - start
             m0, m1 = (read_exr(os.path.join(d, f)) for f in ("mitsuba_0.exr", "mitsuba_1.exr"))
