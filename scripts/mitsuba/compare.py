@@ -1,0 +1,631 @@
+#!/usr/bin/env python3
+"""cltrace against a peer: Mitsuba 3 renders the same small scenes, and the converged images
+must agree region by region within the noise of the two estimates plus a 1% bias allowance.
+
+One description per scene (SCENES below) is written out as the files both renderers read:
+one OBJ per object (triangles, no normals; MTL materials `Kd`/`Ke`, a `map_Kd` texture) and
+a cltrace scene file (scene.toml: the meshes, [camera] and [render]); Mitsuba loads the same
+OBJ files, with a bsdf and an area emitter per object from the same materials.
+
+    compare.py scenes    --out DIR                       the cltrace inputs only
+    compare.py reference --out DIR [--spp N] [--size WxH] inputs + Mitsuba references
+    compare.py check     --cltrace BIN --refs DIR [--spp N]
+
+`scenes` needs only numpy; `reference` needs Mitsuba (scripts/mitsuba/setup.sh installs it),
+and so does `check`, which reads the EXR files through Mitsuba's Bitmap. The tolerance and
+the correspondence of settings are in scripts/mitsuba/README.md.
+"""
+
+import argparse
+import json
+import math
+import os
+import struct
+import subprocess
+import sys
+import tempfile
+import time
+import zlib
+
+import numpy as np
+
+MITSUBA_VARIANT = "scalar_rgb"
+SIGMAS = 4.0  # how many standard deviations of the difference the check allows
+BIAS = 0.01  # plus this share of Mitsuba's value
+TILES = 2  # each object is checked in each of TILES x TILES parts of the image
+SUBSAMPLES = 4  # a pixel belongs to a region when all SUBSAMPLES^2 of its probe rays agree
+UNCHECKED = 255  # regions.png value of pixels that are not checked
+
+
+# ---------------------------------------------------------------------------------------------
+# The scenes: objects (triangles with a material), camera, depth.
+
+
+def quad(p0, p1, p2, p3, uv=None):
+    """Two triangles (p0 p1 p2) (p0 p2 p3): the front face is the side from which p0 p1 p2
+    run counter-clockwise (the normal (p1 - p0) x (p2 - p0))."""
+    tris = [(p0, p1, p2), (p0, p2, p3)]
+    if uv is None:
+        return tris, None
+    return tris, [(uv[0], uv[1], uv[2]), (uv[0], uv[2], uv[3])]
+
+
+def box(lo, hi):
+    """An axis-aligned box, six faces facing out, corners not shared between faces."""
+    (x0, y0, z0), (x1, y1, z1) = lo, hi
+    faces = [
+        ((x0, y0, z1), (x1, y0, z1), (x1, y1, z1), (x0, y1, z1)),  # +z
+        ((x1, y0, z0), (x0, y0, z0), (x0, y1, z0), (x1, y1, z0)),  # -z
+        ((x1, y0, z1), (x1, y0, z0), (x1, y1, z0), (x1, y1, z1)),  # +x
+        ((x0, y0, z0), (x0, y0, z1), (x0, y1, z1), (x0, y1, z0)),  # -x
+        ((x0, y1, z1), (x1, y1, z1), (x1, y1, z0), (x0, y1, z0)),  # +y
+        ((x0, y0, z0), (x1, y0, z0), (x1, y0, z1), (x0, y0, z1)),  # -y
+    ]
+    tris = []
+    for f in faces:
+        tris += quad(*f)[0]
+    return tris
+
+
+def uv_sphere(center, radius, segments, rings):
+    """A UV sphere of flat triangles (faces facing out); the poles are fans."""
+    cx, cy, cz = center
+
+    def point(i, j):
+        theta = math.pi * j / rings
+        phi = 2.0 * math.pi * i / segments
+        return (
+            cx + radius * math.sin(theta) * math.cos(phi),
+            cy + radius * math.cos(theta),
+            cz - radius * math.sin(theta) * math.sin(phi),
+        )
+
+    tris = []
+    for j in range(rings):
+        for i in range(segments):
+            a, b = point(i, j), point(i + 1, j)
+            c, d = point(i + 1, j + 1), point(i, j + 1)
+            if j > 0:
+                tris.append((a, d, c))
+            if j < rings - 1:
+                tris.append((a, c, b))
+    return tris
+
+
+def obj(name, material, tris, uvs=None):
+    return {"name": name, "material": material, "tris": tris, "uvs": uvs}
+
+
+def material(kd, ke=(0.0, 0.0, 0.0), map_kd=None):
+    return {"kd": tuple(kd), "ke": tuple(ke), "map_kd": map_kd}
+
+
+WHITE = material((0.75, 0.75, 0.75))
+RED = material((0.63, 0.065, 0.05))
+GREEN = material((0.14, 0.45, 0.091))
+
+
+def light(radiance):
+    # Albedo 0: an emitter reflects nothing, so its back face (where neither renderer emits)
+    # is black in both, whatever light reaches it.
+    return material((0.0, 0.0, 0.0), (radiance, radiance, radiance))
+
+
+def cornell():
+    """A diffuse Cornell box open towards +z, one white box inside, a square emitter just
+    under the ceiling facing down (nothing above it but the ceiling, which it does not light
+    directly)."""
+    a, b, c, d = (-1, 0, 1), (1, 0, 1), (1, 0, -1), (-1, 0, -1)
+    A, B, C, D = (-1, 2, 1), (1, 2, 1), (1, 2, -1), (-1, 2, -1)
+    s, h = 0.3, 1.98
+    return {
+        "name": "cornell",
+        "objects": [
+            obj("floor", WHITE, quad(a, b, c, d)[0]),  # faces +y
+            obj("ceiling", WHITE, quad(A, D, C, B)[0]),  # faces -y
+            obj("back", WHITE, quad(d, c, C, D)[0]),  # faces +z
+            obj("left", RED, quad(a, d, D, A)[0]),  # x = -1, faces +x
+            obj("right", GREEN, quad(b, B, C, c)[0]),  # x = +1, faces -x
+            obj("box", WHITE, box((0.05, 0.0, -0.6), (0.65, 0.6, 0.0))),
+            obj("light", light(12.0), quad((-s, h, -s), (s, h, -s), (s, h, s), (-s, h, s))[0]),
+        ],
+        "camera": {"eye": (0.0, 1.0, 3.6), "look_at": (0.0, 1.0, 0.0), "up": (0, 1, 0), "fov": 38.0},
+        "max_bounces": 8,
+    }
+
+
+def quad_scene():
+    """A floor lit by a square emitter above it facing down; the camera, above the emitter,
+    sees its dark back."""
+    s, h = 0.35, 1.0
+    return {
+        "name": "quad",
+        "objects": [
+            obj("floor", material((0.8, 0.6, 0.4)), quad((-1, 0, 1), (1, 0, 1), (1, 0, -1), (-1, 0, -1))[0]),
+            obj("light", light(6.0), quad((-s, h, -s), (s, h, -s), (s, h, s), (-s, h, s))[0]),
+        ],
+        "camera": {"eye": (0.0, 2.2, 2.4), "look_at": (0.0, 0.0, 0.0), "up": (0, 1, 0), "fov": 45.0},
+        "max_bounces": 8,
+    }
+
+
+def sphere_scene():
+    """A faceted diffuse UV sphere on a floor, lit by an emitter above."""
+    s, h = 0.5, 2.0
+    return {
+        "name": "sphere",
+        "objects": [
+            obj("floor", WHITE, quad((-2, 0, 2), (2, 0, 2), (2, 0, -2), (-2, 0, -2))[0]),
+            obj("sphere", material((0.3, 0.5, 0.8)), uv_sphere((0.0, 0.5, 0.0), 0.5, 16, 10)),
+            obj("light", light(8.0), quad((-s, h, -s), (s, h, -s), (s, h, s), (-s, h, s))[0]),
+        ],
+        "camera": {"eye": (0.0, 1.3, 2.6), "look_at": (0.0, 0.45, 0.0), "up": (0, 1, 0), "fov": 40.0},
+        "max_bounces": 8,
+    }
+
+
+CHECKER = 4  # squares per side of the textured scene's checkerboard
+CHECKER_TEXELS = 2  # texels per square: magnified everywhere in the image, so that cltrace
+# reads mip level 0 (bilinear, as Mitsuba, which has no mip maps) and not a blurrier level
+CHECKER_COLOURS = ((220, 200, 60), (40, 70, 180))  # sRGB: square (i, j) has colour (i + j) % 2
+MARKER_COLOUR = (230, 30, 30)  # square (0, 0) instead
+
+
+def textured_scene():
+    """A floor quad with a checkerboard texture (map_Kd): uv (0, 0) at the corner (-1, 0, 1),
+    u along +x, v along -z, lit from above. Square (i, j) (i along u, j along v) has colour
+    (i + j) % 2, but the corner square (0, 0) at uv (0, 0) is red, so that a flip of u or v
+    or both in either renderer shows."""
+    s, h = 0.4, 1.2
+    uv = ((0, 0), (1, 0), (1, 1), (0, 1))
+    tris, uvs = quad((-1, 0, 1), (1, 0, 1), (1, 0, -1), (-1, 0, -1), uv)
+    return {
+        "name": "textured",
+        "objects": [
+            obj("floor", material((1, 1, 1), map_kd="checker.png"), tris, uvs),
+            obj("light", light(5.0), quad((-s, h, -s), (s, h, -s), (s, h, s), (-s, h, s))[0]),
+        ],
+        "camera": {"eye": (0.0, 1.0, 2.2), "look_at": (0.0, 0.0, 0.1), "up": (0, 1, 0), "fov": 50.0},
+        "max_bounces": 8,
+        "regions": "checker",
+    }
+
+
+SCENES = {s()["name"]: s for s in (cornell, quad_scene, sphere_scene, textured_scene)}
+
+
+# ---------------------------------------------------------------------------------------------
+# Writing the inputs: OBJ + MTL (+ PNG) and the cltrace scene file.
+
+
+def fmt(x):
+    return repr(float(x))
+
+
+def fmt_obj(x):
+    """A coordinate in an OBJ file: 7 significant digits (both renderers read the same file)."""
+    return f"{float(x):.7g}"
+
+
+def write_png(path, pixels):
+    """An 8-bit PNG, grey (H x W) or RGB (H x W x 3), unfiltered rows."""
+    pixels = np.ascontiguousarray(pixels, dtype=np.uint8)
+    h, w = pixels.shape[:2]
+    colour = 2 if pixels.ndim == 3 else 0
+    raw = b"".join(b"\x00" + pixels[y].tobytes() for y in range(h))
+
+    def chunk(kind, data):
+        body = kind + data
+        return struct.pack(">I", len(data)) + body + struct.pack(">I", zlib.crc32(body) & 0xFFFFFFFF)
+
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n")
+        f.write(chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, colour, 0, 0, 0)))
+        f.write(chunk(b"IDAT", zlib.compress(raw, 9)))
+        f.write(chunk(b"IEND", b""))
+
+
+def read_png_grey(path):
+    """The grey 8-bit PNGs write_png writes (one IDAT or several, rows of any filter)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n", f"{path}: not a PNG"
+    pos, idat, w, h = 8, b"", 0, 0
+    while pos < len(data):
+        (n,) = struct.unpack(">I", data[pos : pos + 4])
+        kind, body = data[pos + 4 : pos + 8], data[pos + 8 : pos + 8 + n]
+        if kind == b"IHDR":
+            w, h, depth, colour = struct.unpack(">IIBB", body[:10])
+            assert depth == 8 and colour == 0, f"{path}: not an 8-bit grey PNG"
+        elif kind == b"IDAT":
+            idat += body
+        pos += 12 + n
+    raw = zlib.decompress(idat)
+    out = np.zeros((h, w), np.uint8)
+    prev = np.zeros(w, np.int32)
+    for y in range(h):
+        ftype, row = raw[y * (w + 1)], np.frombuffer(raw, np.uint8, w, y * (w + 1) + 1).astype(np.int32)
+        cur = np.zeros(w, np.int32)
+        for x in range(w):
+            left = cur[x - 1] if x else 0
+            up, ul = prev[x], (prev[x - 1] if x else 0)
+            if ftype == 0:
+                p = 0
+            elif ftype == 1:
+                p = left
+            elif ftype == 2:
+                p = up
+            elif ftype == 3:
+                p = (left + up) // 2
+            else:
+                pa, pb, pc = abs(up - ul), abs(left - ul), abs(left + up - 2 * ul)
+                p = left if pa <= pb and pa <= pc else (up if pb <= pc else ul)
+            cur[x] = (row[x] + p) & 255
+        out[y], prev = cur, cur
+    return out
+
+
+def checker_texture():
+    n = CHECKER * CHECKER_TEXELS
+    img = np.zeros((n, n, 3), np.uint8)
+    for row in range(n):
+        j = CHECKER - 1 - row // CHECKER_TEXELS  # image row 0 is the top: v = 1 (OBJ convention)
+        for col in range(n):
+            i = col // CHECKER_TEXELS
+            img[row, col] = CHECKER_COLOURS[(i + j) % 2]
+    # The marker: square (0, 0), at uv (0, 0) (the image's bottom left), is red.
+    img[n - CHECKER_TEXELS :, :CHECKER_TEXELS] = MARKER_COLOUR
+    return img
+
+
+def write_inputs(scene, out, width, height, spp, seed=0):
+    """Writes the scene's OBJ, MTL, texture and scene.toml into `out`; returns the paths of
+    the OBJ files, object by object."""
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, "scene.mtl"), "w") as f:
+        f.write(f"# {scene['name']}: written by scripts/mitsuba/compare.py\n")
+        for o in scene["objects"]:
+            m = o["material"]
+            f.write(f"\nnewmtl {o['name']}\n")
+            f.write("Kd " + " ".join(fmt(x) for x in m["kd"]) + "\n")
+            f.write("Ke " + " ".join(fmt(x) for x in m["ke"]) + "\n")
+            if m["map_kd"]:
+                f.write(f"map_Kd {m['map_kd']}\n")
+                write_png(os.path.join(out, m["map_kd"]), checker_texture())
+    paths = []
+    for o in scene["objects"]:
+        path = os.path.join(out, o["name"] + ".obj")
+        with open(path, "w") as f:
+            f.write(f"# {scene['name']}/{o['name']}: written by scripts/mitsuba/compare.py\n")
+            f.write("mtllib scene.mtl\n")
+            f.write(f"o {o['name']}\nusemtl {o['name']}\n")
+            for t in o["tris"]:
+                for p in t:
+                    f.write("v " + " ".join(fmt_obj(x) for x in p) + "\n")
+            if o["uvs"]:
+                for t in o["uvs"]:
+                    for uv in t:
+                        f.write("vt " + " ".join(fmt_obj(x) for x in uv) + "\n")
+            for k in range(len(o["tris"])):
+                i = 3 * k + 1
+                if o["uvs"]:
+                    f.write(f"f {i}/{i} {i + 1}/{i + 1} {i + 2}/{i + 2}\n")
+                else:
+                    f.write(f"f {i} {i + 1} {i + 2}\n")
+        paths.append(path)
+    cam = scene["camera"]
+    vec = lambda v: "[" + ", ".join(fmt(x) for x in v) + "]"  # noqa: E731
+    with open(os.path.join(out, "scene.toml"), "w") as f:
+        f.write(f"# {scene['name']}: written by scripts/mitsuba/compare.py from the same description\n")
+        f.write("# as the Mitsuba scene of its references (scripts/mitsuba/README.md).\n")
+        for o in scene["objects"]:
+            f.write(f'\n[[mesh]]\nfile = "{o["name"]}.obj"\n')
+        f.write("\n[camera]\n")
+        f.write(f"eye = {vec(cam['eye'])}\nlook_at = {vec(cam['look_at'])}\nup = {vec(cam['up'])}\n")
+        f.write(f"fov = {fmt(cam['fov'])}\nwidth = {width}\nheight = {height}\n")
+        f.write('\n[render]\nshade = "path"\n')
+        f.write(f"spp = {spp}\nseed = {seed}\nmax_bounces = {scene['max_bounces']}\n")
+        f.write("crease_angle = 0.0\ntwo_sided_lights = false\n")
+    return paths
+
+
+# ---------------------------------------------------------------------------------------------
+# Mitsuba.
+
+
+def mitsuba():
+    import mitsuba as mi
+
+    mi.set_variant(MITSUBA_VARIANT)
+    return mi
+
+
+def mitsuba_scene(mi, scene, out, width, height, spp, max_bounces):
+    cam = scene["camera"]
+    d = {
+        "type": "scene",
+        "integrator": {
+            "type": "path",
+            # cltrace's bounce 0 is the camera ray's hit with its light sample (NEE); Mitsuba's
+            # depth 1 is the emitters seen directly, depth 2 adds that first NEE.
+            "max_depth": max_bounces + 2,
+            "rr_depth": 10000,
+            "hide_emitters": False,
+        },
+        "sensor": {
+            "type": "perspective",
+            "fov": cam["fov"],
+            "fov_axis": "y",
+            "to_world": mi.ScalarTransform4f().look_at(
+                origin=list(cam["eye"]), target=list(cam["look_at"]), up=list(cam["up"])
+            ),
+            "film": {
+                "type": "hdrfilm",
+                "width": width,
+                "height": height,
+                "pixel_format": "rgb",
+                "component_format": "float32",
+                "rfilter": {"type": "box"},
+            },
+            "sampler": {"type": "independent", "sample_count": spp},
+        },
+    }
+    for o in scene["objects"]:
+        m = o["material"]
+        if m["map_kd"]:
+            reflectance = {
+                "type": "bitmap",
+                "filename": os.path.join(out, m["map_kd"]),
+                "raw": False,  # sRGB, decoded to linear, as cltrace decodes a base colour
+                "filter_type": "bilinear",
+                "wrap_mode": "repeat",
+            }
+        else:
+            reflectance = {"type": "rgb", "value": list(m["kd"])}
+        shape = {
+            "type": "obj",
+            "filename": os.path.join(out, o["name"] + ".obj"),
+            "face_normals": True,
+        }
+        if any(m["ke"]):
+            # One-sided, as cltrace's emitters (front face only); albedo 0 in both.
+            shape["bsdf"] = {"type": "diffuse", "reflectance": reflectance}
+            shape["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": list(m["ke"])}}
+        else:
+            # cltrace shades a back face like the front.
+            shape["bsdf"] = {"type": "twosided", "material": {"type": "diffuse", "reflectance": reflectance}}
+        d[o["name"]] = shape
+    # optimize=False: no merging of the objects of one bsdf into one shape (the region map
+    # tells them apart by shape).
+    return mi.load_dict(d, optimize=False)
+
+
+def region_map(mi, loaded, scene, width, height):
+    """Regions: each object's pixels in each of TILES x TILES parts of the image (the textured
+    scene: each checker colour instead of each object), a pixel counted only where all of its
+    SUBSAMPLES^2 probe rays (a grid reaching the pixel's edges) see the same thing; small
+    regions are dropped. Returns the map (H x W, UNCHECKED outside) and the regions' names."""
+    sensor = loaded.sensors()[0]
+    names = [o["name"] for o in scene["objects"]]
+    checker = scene.get("regions") == "checker"
+    k = SUBSAMPLES
+    offsets = [0.02 + 0.96 * i / (k - 1) for i in range(k)]
+    label = np.full((height, width), -1, np.int64)
+    for y in range(height):
+        for x in range(width):
+            seen = set()
+            for oy in offsets:
+                for ox in offsets:
+                    ray, _ = sensor.sample_ray(
+                        0.0, 0.5, mi.ScalarPoint2f((x + ox) / width, (y + oy) / height), mi.ScalarPoint2f(0.5, 0.5)
+                    )
+                    si = loaded.ray_intersect(ray)
+                    if not si.is_valid():
+                        seen.add(None)
+                        continue
+                    what = names.index(si.shape.id())
+                    if checker and scene["objects"][what]["material"]["map_kd"]:
+                        # The floor's square from the hit's position (uv (0,0) at x=-1, z=+1).
+                        u, v = (si.p[0] + 1.0) / 2.0, (1.0 - si.p[2]) / 2.0
+                        i = min(int(u * CHECKER), CHECKER - 1)
+                        j = min(int(v * CHECKER), CHECKER - 1)
+                        what = len(names) + (2 if i == 0 and j == 0 else (i + j) % 2)
+                    seen.add(what)
+            if len(seen) == 1 and None not in seen:
+                label[y, x] = seen.pop()
+    kinds = names + ["floor/colour 0", "floor/colour 1", "floor/marker"]
+    regions, out = [], np.full((height, width), UNCHECKED, np.uint8)
+    least = max(4, width * height // 256)
+    rows = ["top", "bottom"] if TILES == 2 else [f"row {r}" for r in range(TILES)]
+    cols = ["left", "right"] if TILES == 2 else [f"column {c}" for c in range(TILES)]
+    for what, kind in enumerate(kinds):
+        for ty in range(TILES):
+            for tx in range(TILES):
+                mask = np.zeros_like(label, bool)
+                ys, xs = slice(ty * height // TILES, (ty + 1) * height // TILES), slice(
+                    tx * width // TILES, (tx + 1) * width // TILES
+                )
+                mask[ys, xs] = label[ys, xs] == what
+                n = int(mask.sum())
+                if n < least:
+                    continue
+                assert len(regions) < UNCHECKED
+                out[mask] = len(regions)
+                regions.append({"index": len(regions), "name": f"{kind} {rows[ty]}-{cols[tx]}", "pixels": n})
+    return out, regions
+
+
+def write_exr_half(mi, path, rgb):
+    bmp = mi.Bitmap(np.ascontiguousarray(rgb, dtype=np.float32), mi.Bitmap.PixelFormat.RGB)
+    bmp = bmp.convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float16, False)
+    bmp.write(path)
+
+
+def read_exr(path):
+    """Linear RGB (H x W x 3, float64) of an EXR file, through Mitsuba's Bitmap."""
+    mi = mitsuba()
+    bmp = mi.Bitmap(path).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32, False)
+    return np.array(bmp, dtype=np.float64)
+
+
+def parse_size(text):
+    w, h = text.lower().split("x")
+    return int(w), int(h)
+
+
+def selected(names):
+    if not names:
+        return list(SCENES)
+    picked = names.split(",")
+    for n in picked:
+        if n not in SCENES:
+            sys.exit(f"compare.py: no scene {n!r} (the scenes: {', '.join(SCENES)})")
+    return picked
+
+
+def cmd_scenes(args):
+    w, h = parse_size(args.size)
+    for name in selected(args.scenes):
+        scene = SCENES[name]()
+        write_inputs(scene, os.path.join(args.out, name), w, h, args.spp)
+        print(f"{name}: {os.path.join(args.out, name, 'scene.toml')}")
+
+
+def cmd_reference(args):
+    mi = mitsuba()
+    w, h = parse_size(args.size)
+    for name in selected(args.scenes):
+        scene = SCENES[name]()
+        if args.max_bounces is not None:
+            scene["max_bounces"] = args.max_bounces
+        out = os.path.join(args.out, name)
+        write_inputs(scene, out, w, h, args.check_spp)
+        start = time.time()
+        loaded = mitsuba_scene(mi, scene, out, w, h, args.spp, scene["max_bounces"])
+        for seed in (0, 1):
+            img = np.array(mi.render(loaded, spp=args.spp, seed=seed), dtype=np.float32)
+            write_exr_half(mi, os.path.join(out, f"mitsuba_{seed}.exr"), img)
+        rendered = time.time() - start
+        regions_png, regions = region_map(mi, loaded, scene, w, h)
+        write_png(os.path.join(out, "regions.png"), regions_png)
+        info = {
+            "scene": name,
+            "written_by": "scripts/mitsuba/compare.py reference",
+            "mitsuba": mi.__version__,
+            "variant": MITSUBA_VARIANT,
+            "size": [w, h],
+            "spp_per_half": args.spp,
+            "halves": {"mitsuba_0.exr": 0, "mitsuba_1.exr": 1},
+            "max_bounces": scene["max_bounces"],
+            "mitsuba_max_depth": scene["max_bounces"] + 2,
+            "cltrace_scene": "scene.toml",
+            "regions_png": "regions.png: 8-bit grey, a pixel's region index, 255 = not checked",
+            "regions": regions,
+            "tolerance": {
+                "sigmas": SIGMAS,
+                "bias": BIAS,
+                "rule": "per region and channel: |c - m| <= sigmas * sqrt(sc^2 + sm^2) + bias * m, "
+                "c and m the region's mean of both halves, s^2 = sum over the region's pixels of "
+                "((half0 - half1) / 2)^2 / pixels^2",
+            },
+        }
+        with open(os.path.join(out, "scene.json"), "w") as f:
+            json.dump(info, f, indent=1)
+            f.write("\n")
+        print(f"{name}: {w}x{h}, 2 x {args.spp} spp in {rendered:.1f} s, {len(regions)} regions -> {out}")
+
+
+def region_stats(a, b, mask):
+    """Mean of both halves over the region, per channel, and its standard deviation: the
+    pixels are independent, and ((a - b) / 2)^2 is an unbiased estimate of the variance of a
+    pixel's mean (a + b) / 2 when a and b are independent estimates with one distribution."""
+    n = mask.sum()
+    mean = ((a[mask] + b[mask]) / 2).sum(axis=0) / n
+    var = (((a[mask] - b[mask]) / 2) ** 2).sum(axis=0) / n**2
+    return mean, np.sqrt(var)
+
+
+def compare(c0, c1, m0, m1, regions_png, regions):
+    """Rows (region, channel, c, m, diff, allowance, pass) of one scene."""
+    rows = []
+    for r in regions:
+        mask = regions_png == r["index"]
+        c, sc = region_stats(c0, c1, mask)
+        m, sm = region_stats(m0, m1, mask)
+        for ch, cname in enumerate("RGB"):
+            allow = SIGMAS * math.hypot(sc[ch], sm[ch]) + BIAS * m[ch]
+            diff = c[ch] - m[ch]
+            rows.append((r["name"], cname, c[ch], m[ch], diff, allow, abs(diff) <= allow))
+    return rows
+
+
+def cmd_check(args):
+    refs = args.refs
+    dirs = [refs] if os.path.exists(os.path.join(refs, "scene.json")) else [
+        os.path.join(refs, d) for d in sorted(os.listdir(refs)) if os.path.exists(os.path.join(refs, d, "scene.json"))
+    ]
+    if args.scenes:
+        dirs = [d for d in dirs if os.path.basename(d) in args.scenes.split(",")]
+    if not dirs:
+        sys.exit(f"compare.py: no references (scene.json) in {refs}")
+    half = max(1, args.spp // 2)
+    failed = 0
+    print(f"{'scene':<9} {'region':<28} ch {'cltrace':>9} {'mitsuba':>9} {'diff %':>8} {'allow %':>8}  pass")
+    with tempfile.TemporaryDirectory() as tmp:
+        for d in dirs:
+            info = json.load(open(os.path.join(d, "scene.json")))
+            w, h = info["size"]
+            cl = []
+            start = time.time()
+            for seed in (0, 1):
+                path = os.path.join(tmp, f"{info['scene']}_{seed}.exr")
+                cmd = [args.cltrace, "render", os.path.join(d, info["cltrace_scene"]), "--shade", "path",
+                       "--spp", str(half), "--seed", str(seed), "--max-bounces", str(info["max_bounces"]),
+                       "--width", str(w), "--height", str(h), "-o", path, "-q"]
+                if subprocess.run(cmd).returncode != 0:
+                    sys.exit(f"compare.py: cltrace failed on {info['scene']}: {' '.join(cmd)}")
+                cl.append(read_exr(path))
+            took = time.time() - start
+            m0, m1 = (read_exr(os.path.join(d, f)) for f in ("mitsuba_0.exr", "mitsuba_1.exr"))
+            rows = compare(cl[0], cl[1], m0, m1, read_png_grey(os.path.join(d, "regions.png")), info["regions"])
+            for name, ch, c, m, diff, allow, ok in rows:
+                pct = lambda x: f"{100 * x / m:8.2f}" if m > 0 else f"{'-':>8}"  # noqa: E731
+                print(f"{info['scene']:<9} {name:<28} {ch}  {c:9.5f} {m:9.5f} {pct(diff)} {pct(allow)}  "
+                      f"{'yes' if ok else 'NO'}")
+                failed += not ok
+            print(f"# {info['scene']}: cltrace 2 x {half} spp in {took:.1f} s, Mitsuba 2 x {info['spp_per_half']} spp")
+    if failed:
+        print(f"{failed} region channels disagree beyond the tolerance")
+        sys.exit(1)
+    print("every region agrees within the tolerance")
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = p.add_subparsers(dest="command", required=True)
+    s = sub.add_parser("scenes", help="write each scene's cltrace inputs (OBJ, MTL, scene.toml)")
+    s.add_argument("--out", required=True)
+    s.add_argument("--size", default="64x64")
+    s.add_argument("--spp", type=int, default=1024, help="the scene files' spp")
+    s.add_argument("--scenes", help="comma-separated names (default: all)")
+    s.set_defaults(run=cmd_scenes)
+    r = sub.add_parser("reference", help="write the inputs and render the Mitsuba references")
+    r.add_argument("--out", required=True)
+    r.add_argument("--spp", type=int, default=4096, help="Mitsuba's samples per pixel per half")
+    r.add_argument("--size", default="64x64")
+    r.add_argument("--scenes", help="comma-separated names (default: all)")
+    r.add_argument("--max-bounces", type=int, help="override the scenes' max_bounces (cltrace's count)")
+    r.add_argument("--check-spp", type=int, default=1024, help="the scene files' spp")
+    r.set_defaults(run=cmd_reference)
+    c = sub.add_parser("check", help="render the references' scenes with cltrace and compare")
+    c.add_argument("--cltrace", required=True, help="the cltrace binary")
+    c.add_argument("--refs", required=True, help="a folder of scene folders (or one) with scene.json")
+    c.add_argument("--spp", type=int, default=1024, help="cltrace's samples per pixel, both halves")
+    c.add_argument("--scenes", help="comma-separated names (default: all found)")
+    c.set_defaults(run=cmd_check)
+    args = p.parse_args()
+    args.run(args)
+
+
+if __name__ == "__main__":
+    main()
