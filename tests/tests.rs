@@ -18,6 +18,7 @@ mod interrupt;
 mod layout;
 mod limits;
 mod loaders;
+mod mitsuba;
 mod module_graph;
 mod oclgrind;
 mod opencl_vs_cpu;
