@@ -27,13 +27,17 @@ typedef struct {
 } Triangle;
 
 /* A material (src/material/mod.rs): base colour and emission with their textures, the
- * glTF metallic-roughness factors, the normal map, the cut-out mask and the occlusion map.
- * A texture slot is an index into the texture table, or NO_TEXTURE. */
+ * glTF metallic-roughness factors, the normal map, the cut-out mask and the occlusion map,
+ * then the scattering model (BSDF_*, cl/bsdf.cl) and its parameters. A texture slot is an
+ * index into the texture table, or NO_TEXTURE. */
 typedef struct {
     float albedo[3]; int base_texture;
     float emission[3]; int emission_texture;
     float metallic; float roughness; int metallic_roughness_texture; int normal_texture;
     float normal_scale; int alpha_texture; float alpha_cutoff; int occlusion_texture;
+    float specular[3]; uint bsdf;
+    float eta[3]; float ior;
+    float k[3]; uint reserved;
 } Material;
 
 /* One pixel's closest hit: the triangle's index in file order (MISS for none) and the

@@ -149,6 +149,10 @@ __kernel void sample_path(SAMPLE_PARAMS) {
     uint hit = trace(SCENE, org, dir, INFINITY, false, false, &t);
     /* The ray cone's width at the last hit (0 at the eye), for texture filtering. */
     float cone = 0.0f;
+    /* The density of the last bounce's direction, to weigh an emitter it hits against
+     * light sampling (the power heuristic); 0 where light sampling could not have found
+     * it: camera rays, delta lobes, light through the surface. */
+    float last_pdf = 0.0f;
     for (uint bounce = 0;; ++bounce) {
         if (hit == MISS) {
             if (emitter_count == 0) radiance += throughput * sky(dir);
@@ -157,41 +161,81 @@ __kernel void sample_path(SAMPLE_PARAMS) {
         const __global Triangle* tri = &tris[hit];
         cone = bounce == 0 ? camera_cone(du, t) : cone + BOUNCE_CONE_SPREAD * t;
         SurfacePoint sp = surface_point(SURFACE, tri, org, dir, t, offset, cone);
-        /* Later bounces reach emitters through next-event estimation instead. */
-        if (bounce == 0) radiance += throughput * sp.emission;
+        if (last_pdf > 0.0f && max3(sp.emission) > 0.0f) {
+            /* dir is a unit vector after the camera ray, so t is the distance. */
+            float r = t * t / (fabs(dot3(sp.ng, dir)) * emitter_area) / last_pdf;
+            radiance += throughput * sp.emission * (1.0f / (1.0f + r * r));
+        } else if (last_pdf == 0.0f) {
+            radiance += throughput * sp.emission;
+        }
+        Shading sh = shading_at(&materials[tri->material], &sp);
+        /* Lambert alone takes the short way: no local frame. */
+        bool lambert = sh.bsdf == BSDF_DIFFUSE && !(sh.metallic > 0.0f);
         float3 origin = sp.origin;
-        float3 albedo = sp.albedo;
         float3 n = sp.ns;
+        float3 tn, bn;
+        basis(n, &tn, &bn);
+        float3 wo = -normalize(dir);
+        float3 wo_l = (float3)(dot(wo, tn), dot(wo, bn), dot(wo, n));
+        bool last = bounce == max_bounces;
         uint d = bounce_dim(bounce);
-        if (emitter_count > 0) {
+        if (emitter_count > 0 && !shading_all_delta(&sh)) {
             const __global Triangle* e = &tris[emitters[pick_emitter(emitter_cdf, emitter_count, sample_1d(key, d))]];
             float u1 = sample_1d(key, d + 1), u2 = sample_1d(key, d + 2);
             float3 q = triangle_point(load3(e->v0), load3(e->v1), load3(e->v2), u1, u2);
             float3 w = q - origin;
             float d2 = dot(w, w);
             float3 l = w / sqrt(d2);
-            float cos_here = dot(n, l);
             float cos_there = dot(emitting_normal(e, l), -l);
-            if (cos_here > 0.0f && cos_there > 0.0f && dot3(l, sp.ng) > 0.0f) {
-                count += 1;
-                if (!occluded(SCENE, origin, l, sqrt(d2) * (1.0f - 1e-4f))) {
-                    float su = sqrt(u1);
-                    radiance += throughput * albedo / M_PI_F * emitted(SURFACE, e, 1.0f - su, u2 * su)
-                                * (cos_here * cos_there / d2 * emitter_area);
+            if (cos_there > 0.0f && dot3(l, sp.ng) > 0.0f) {
+                float bsdf_pdf;
+                float3 f;
+                if (lambert) {
+                    float cos_here = fmax(dot(n, l), 0.0f);
+                    f = sh.albedo * (cos_here / M_PI_F);
+                    bsdf_pdf = cos_here / M_PI_F;
+                } else {
+                    f = bsdf_eval(&sh, wo_l, (float3)(dot(l, tn), dot(l, bn), dot(l, n)), &bsdf_pdf);
+                }
+                if (max3(f) > 0.0f) {
+                    count += 1;
+                    if (!occluded(SCENE, origin, l, sqrt(d2) * (1.0f - 1e-4f))) {
+                        float su = sqrt(u1);
+                        float light_pdf = d2 / (cos_there * emitter_area);
+                        /* The last bounce samples no direction: light samples count whole. */
+                        float r = bsdf_pdf / light_pdf;
+                        float weight = last ? 1.0f : 1.0f / (1.0f + r * r);
+                        radiance += throughput * f * emitted(SURFACE, e, 1.0f - su, u2 * su) * (weight / light_pdf);
+                    }
                 }
             }
         }
-        if (bounce == max_bounces) break;
-        throughput *= albedo;
+        if (last) break;
+        float u1 = sample_1d(key, d + 4), u2 = sample_1d(key, d + 5);
+        BsdfSample bs;
+        if (lambert) {
+            bs.wi = cosine_direction(n, u1, u2);
+            bs.weight = sh.albedo;
+            bs.pdf = fmax(dot(bs.wi, n), 0.0f) / M_PI_F;
+            bs.delta = false;
+            bs.transmitted = false;
+        } else {
+            if (!bsdf_sample(&sh, wo_l, sample_1d(key, d + 6), u1, u2, sample_1d(key, d + 7), &bs)) break;
+            bs.wi = tn * bs.wi.x + bn * bs.wi.y + n * bs.wi.z;
+        }
+        throughput *= bs.weight;
         if (bounce >= ROULETTE_AFTER) {
-            float keep = fmin(fmax(fmax(throughput.x, throughput.y), throughput.z), 0.95f);
+            float keep = fmin(max3(throughput), 0.95f);
             if (sample_1d(key, d + 3) >= keep) break;
             throughput /= keep;
         }
-        org = origin;
-        dir = cosine_direction(n, sample_1d(key, d + 4), sample_1d(key, d + 5));
-        /* A direction below the geometric surface would leave through it. */
-        if (dot3(dir, sp.ng) <= 0.0f) break;
+        /* A reflected direction below the geometric surface would leave through it, a
+         * refracted one above it would not. */
+        float side = dot3(bs.wi, sp.ng);
+        if (bs.transmitted ? side >= 0.0f : side <= 0.0f) break;
+        org = bs.transmitted ? origin - sp.ng * (2.0f * offset) : origin;
+        dir = bs.wi;
+        last_pdf = bs.delta || bs.transmitted ? 0.0f : bs.pdf;
         count += 1;
         hit = trace(SCENE, org, dir, INFINITY, false, true, &t);
     }

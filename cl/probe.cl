@@ -42,6 +42,12 @@ __kernel void probe_layout(__global uint* out) {
     out[i++] = OFFSET(Material, alpha_texture);
     out[i++] = OFFSET(Material, alpha_cutoff);
     out[i++] = OFFSET(Material, occlusion_texture);
+    out[i++] = OFFSET(Material, specular);
+    out[i++] = OFFSET(Material, bsdf);
+    out[i++] = OFFSET(Material, eta);
+    out[i++] = OFFSET(Material, ior);
+    out[i++] = OFFSET(Material, k);
+    out[i++] = OFFSET(Material, reserved);
     out[i++] = sizeof(TextureInfo);
     out[i++] = OFFSET(TextureInfo, levels);
     out[i++] = OFFSET(TextureInfo, wrap_v);
@@ -97,6 +103,12 @@ __kernel void probe_constants(__global uint* out) {
     out[i++] = TRIANGLE_MASKED;
     out[i++] = TRIANGLE_TWO_SIDED;
     out[i++] = as_uint(BOUNCE_CONE_SPREAD);
+    out[i++] = as_uint(SMOOTH_ROUGHNESS);
+    out[i++] = BSDF_DIFFUSE;
+    out[i++] = BSDF_CONDUCTOR;
+    out[i++] = BSDF_DIELECTRIC;
+    out[i++] = BSDF_THIN_DIELECTRIC;
+    out[i++] = BSDF_PLASTIC;
 }
 
 /* The camera rays of every pixel of a width x height image, for tests/camera.rs: the camera

@@ -73,6 +73,9 @@ typedef struct {
     float3 normal;   /* unit shading normal as the mesh orients it (the normal shade mode) */
     float3 albedo;   /* base colour: factor x texture x vertex colour */
     float3 emission; /* emitted radiance: factor x texture */
+    float roughness; /* perceptual roughness: factor x texture (green) */
+    float metallic;  /* metalness: factor x texture (blue) */
+    bool front_face; /* whether the ray hit the side the winding's normal points to */
 } SurfacePoint;
 
 /* Texture `index` at uv for a ray cone of lod_base (log2 of the footprint in texture
@@ -101,6 +104,9 @@ FORCE_INLINE SurfacePoint surface_point(SURFACE_PARAMS, const __global Triangle*
     /* An emitter shines from its front face only, unless two-sided (TRIANGLE_TWO_SIDED). */
     bool shines = !back || (tri->flags & TRIANGLE_TWO_SIDED) != 0u;
     s.emission = shines ? load3(m->emission) : (float3)(0.0f);
+    s.roughness = m->roughness;
+    s.metallic = m->metallic;
+    s.front_face = !back;
     uint prim = tri->prim;
     if (surface_flags == 0u) {
         /* Flat and untextured: the plain hit point, as before shading data existed. */
@@ -160,6 +166,11 @@ FORCE_INLINE SurfacePoint surface_point(SURFACE_PARAMS, const __global Triangle*
         }
         if (m->emission_texture != NO_TEXTURE && shines) {
             s.emission = s.emission * sample_footprint(SURFACE, m->emission_texture, uv, lod_base).xyz;
+        }
+        if (m->metallic_roughness_texture != NO_TEXTURE) {
+            float4 mr = sample_footprint(SURFACE, m->metallic_roughness_texture, uv, lod_base);
+            s.roughness *= mr.y;
+            s.metallic *= mr.z;
         }
     }
     if ((surface_flags & SURFACE_COLORS) != 0u) {

@@ -23,6 +23,7 @@ use cltrace::render::integrator::{
     Accumulation, Lighting, MAX_SAMPLE_RADIANCE, RADIANCE_SCALE, ROULETTE_AFTER, SHADOW_AMBIENT,
     SampleSettings,
 };
+use cltrace::render::bsdf;
 use cltrace::render::sampling::{DIMS_PER_BOUNCE, LENS_DIM, LENS_TRIES};
 use cltrace::render::{Hit, MISS, Shade};
 use ocl::core::{KernelArgInfo, KernelArgInfoResult, KernelInfo, KernelInfoResult};
@@ -96,6 +97,12 @@ fn device_structs_match_the_rust_structs() {
             "Material.occlusion_texture",
             offset_of!(Material, occlusion_texture),
         ),
+        ("Material.specular", offset_of!(Material, specular)),
+        ("Material.bsdf", offset_of!(Material, bsdf)),
+        ("Material.eta", offset_of!(Material, eta)),
+        ("Material.ior", offset_of!(Material, ior)),
+        ("Material.k", offset_of!(Material, k)),
+        ("Material.reserved", offset_of!(Material, reserved)),
         ("sizeof(TextureInfo)", size_of::<TextureInfo>()),
         ("TextureInfo.levels", offset_of!(TextureInfo, levels)),
         ("TextureInfo.wrap_v", offset_of!(TextureInfo, wrap_v)),
@@ -171,6 +178,12 @@ fn device_constants_match_the_rust_constants() {
         ("TRIANGLE_MASKED", cltrace::intersect::TRIANGLE_MASKED),
         ("TRIANGLE_TWO_SIDED", cltrace::intersect::TRIANGLE_TWO_SIDED),
         ("BOUNCE_CONE_SPREAD", surface::BOUNCE_CONE_SPREAD.to_bits()),
+        ("SMOOTH_ROUGHNESS", bsdf::SMOOTH_ROUGHNESS.to_bits()),
+        ("BSDF_DIFFUSE", bsdf::BSDF_DIFFUSE),
+        ("BSDF_CONDUCTOR", bsdf::BSDF_CONDUCTOR),
+        ("BSDF_DIELECTRIC", bsdf::BSDF_DIELECTRIC),
+        ("BSDF_THIN_DIELECTRIC", bsdf::BSDF_THIN_DIELECTRIC),
+        ("BSDF_PLASTIC", bsdf::BSDF_PLASTIC),
     ];
     // The probe reports every constant the host defines for the kernels, none left out.
     let shared: Vec<&str> = shared_constants().iter().map(|c| c.0).collect();

@@ -42,6 +42,7 @@ const FILES: &[(&str, &str)] = &[
     ("cwbvh.cl", include_str!("../../cl/cwbvh.cl")),
     ("brute.cl", include_str!("../../cl/brute.cl")),
     ("sampling.cl", include_str!("../../cl/sampling.cl")),
+    ("bsdf.cl", include_str!("../../cl/bsdf.cl")),
     ("shade.cl", include_str!("../../cl/shade.cl")),
     ("trace.cl", include_str!("../../cl/trace.cl")),
     ("integrator.cl", include_str!("../../cl/integrator.cl")),
@@ -93,7 +94,7 @@ fn hex_float(v: f32) -> String {
 /// kernel report each as the device compiler sees it.
 pub fn shared_constants() -> Vec<(&'static str, Constant)> {
     use crate::material::{Wrap, surface};
-    use crate::render::{Shade, integrator, sampling};
+    use crate::render::{Shade, bsdf, integrator, sampling};
     use Constant::*;
     vec![
         ("MISS", U32(crate::render::MISS)),
@@ -127,6 +128,12 @@ pub fn shared_constants() -> Vec<(&'static str, Constant)> {
             U32(crate::intersect::TRIANGLE_TWO_SIDED),
         ),
         ("BOUNCE_CONE_SPREAD", F32(surface::BOUNCE_CONE_SPREAD)),
+        ("SMOOTH_ROUGHNESS", F32(bsdf::SMOOTH_ROUGHNESS)),
+        ("BSDF_DIFFUSE", U32(bsdf::BSDF_DIFFUSE)),
+        ("BSDF_CONDUCTOR", U32(bsdf::BSDF_CONDUCTOR)),
+        ("BSDF_DIELECTRIC", U32(bsdf::BSDF_DIELECTRIC)),
+        ("BSDF_THIN_DIELECTRIC", U32(bsdf::BSDF_THIN_DIELECTRIC)),
+        ("BSDF_PLASTIC", U32(bsdf::BSDF_PLASTIC)),
     ]
 }
 
@@ -209,7 +216,7 @@ fn program_files(layout: Option<Layout>, sampling: bool) -> Vec<String> {
     }
     files.extend(["shade.cl", "trace.cl"].map(String::from));
     if sampling {
-        files.extend(["sampling.cl", "integrator.cl"].map(String::from));
+        files.extend(["sampling.cl", "bsdf.cl", "integrator.cl"].map(String::from));
     }
     files
 }

@@ -88,7 +88,7 @@ use crate::error::{Error, Result};
 use crate::input::generate::Generator;
 use crate::input::load_mesh;
 use crate::input::scene::{Ground, PlacedMesh, SceneMeshes};
-use crate::material::Material;
+use crate::material::{Bsdf, Material};
 use crate::mesh::Mesh;
 use crate::render::integrator::Light;
 use crate::render::{Method, Shade};
@@ -321,6 +321,85 @@ impl<'de> Deserialize<'de> for Scale {
 struct MaterialTable {
     albedo: Option<[f32; 3]>,
     emission: Option<[f32; 3]>,
+    bsdf: Option<Bsdf>,
+    roughness: Option<f32>,
+    metallic: Option<f32>,
+    ior: Option<f32>,
+    specular: Option<[f32; 3]>,
+    metal: Option<String>,
+    eta: Option<[f32; 3]>,
+    k: Option<[f32; 3]>,
+}
+
+impl MaterialTable {
+    /// The material, or what is wrong with it.
+    fn material(self) -> std::result::Result<Material, String> {
+        let albedo = self.albedo.unwrap_or(crate::material::DEFAULT_ALBEDO);
+        let emission = self.emission.unwrap_or([0.0; 3]);
+        if let Some(problem) = albedo_problem("material albedo", albedo) {
+            return Err(problem);
+        }
+        if !emission.iter().all(|c| c.is_finite() && *c >= 0.0) {
+            return Err(format!(
+                "material emission {emission:?}: each channel must be finite and 0 or more"
+            ));
+        }
+        let mut m = Material::emitting(albedo, emission);
+        if let Some(b) = self.bsdf {
+            m.bsdf = b.code();
+        }
+        for (key, value, slot) in [
+            ("roughness", self.roughness, &mut m.roughness),
+            ("metallic", self.metallic, &mut m.metallic),
+        ] {
+            if let Some(v) = value {
+                if !(0.0..=1.0).contains(&v) {
+                    return Err(format!("material {key} {v}: must be in [0, 1]"));
+                }
+                *slot = v;
+            }
+        }
+        if let Some(ior) = self.ior {
+            if !(ior.is_finite() && (1.0 / 16.0..=16.0).contains(&ior)) {
+                return Err(format!("material ior {ior}: must be in [1/16, 16]"));
+            }
+            m.ior = ior;
+        }
+        if let Some(s) = self.specular {
+            if let Some(problem) = albedo_problem("material specular", s) {
+                return Err(problem);
+            }
+            m.specular = s;
+        }
+        if let Some(name) = &self.metal {
+            if self.eta.is_some() || self.k.is_some() {
+                return Err(format!(
+                    "material metal \"{name}\" and eta/k: give one or the other"
+                ));
+            }
+            let Some((_, eta, k)) = crate::material::CONDUCTORS.iter().find(|c| c.0 == name)
+            else {
+                let names: Vec<&str> = crate::material::CONDUCTORS.iter().map(|c| c.0).collect();
+                return Err(format!(
+                    "material metal \"{name}\": not one of {}",
+                    names.join(", ")
+                ));
+            };
+            (m.eta, m.k) = (*eta, *k);
+        }
+        for (key, value, slot) in [("eta", self.eta, &mut m.eta), ("k", self.k, &mut m.k)] {
+            if let Some(v) = value {
+                if !v.iter().all(|c| c.is_finite() && (0.0..=100.0).contains(c)) {
+                    return Err(format!("material {key} {v:?}: each channel must be in [0, 100]"));
+                }
+                *slot = v;
+            }
+        }
+        if self.k.is_some() && !m.eta.iter().all(|&c| c > 0.0) {
+            return Err("material k without a positive eta in every channel".into());
+        }
+        Ok(m)
+    }
 }
 
 /// The `[ground]` table; every key optional.
@@ -448,19 +527,7 @@ impl MeshTable {
             None => None,
             Some(m) => {
                 let span = m.span();
-                let m = m.into_inner();
-                let albedo = m.albedo.unwrap_or(crate::material::DEFAULT_ALBEDO);
-                let emission = m.emission.unwrap_or([0.0; 3]);
-                if let Some(problem) = albedo_problem("material albedo", albedo) {
-                    return Err(place.at(span, problem));
-                }
-                if !emission.iter().all(|c| c.is_finite() && *c >= 0.0) {
-                    return Err(place.at(
-                        span,
-                        format!("material emission {emission:?}: each channel must be finite and 0 or more"),
-                    ));
-                }
-                Some(Material::emitting(albedo, emission))
+                Some(m.into_inner().material().map_err(|p| place.at(span, p))?)
             }
         };
         Ok(PlacedMesh {

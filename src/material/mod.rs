@@ -17,10 +17,10 @@ pub const NO_TEXTURE: i32 = -1;
 /// The albedo of triangles without a material: a mid grey.
 pub(crate) const DEFAULT_ALBEDO: [f32; 3] = [0.7, 0.7, 0.7];
 
-/// A material as the kernels read it (`Material` in cl/common.cl): four 16-byte rows.
-/// Texture slots are indices into [`Materials::textures`], or [`NO_TEXTURE`]. The shading
-/// of this renderer is Lambertian; metallic and roughness are kept, as glTF gives
-/// them, for the BSDFs that read them.
+/// A material as the kernels read it (`Material` in cl/common.cl): seven 16-byte rows.
+/// Texture slots are indices into [`Materials::textures`], or [`NO_TEXTURE`]. How it
+/// scatters light is [`Material::bsdf`], one of [`Bsdf`]'s models (src/render/bsdf.rs and
+/// cl/bsdf.cl), blended with a metal by [`Material::metallic`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Material {
@@ -54,6 +54,85 @@ pub struct Material {
     pub alpha_cutoff: f32,
     /// Ambient occlusion texture (red channel), or [`NO_TEXTURE`].
     pub occlusion_texture: i32,
+    /// A tint of the specular part: the conductor's reflectance, the plastic's coating
+    /// reflection, the dielectrics' transmission (MTL `Ks` or `Tf`); 1 leaves it untinted.
+    pub specular: [f32; 3],
+    /// The scattering model: a [`Bsdf`] code.
+    pub bsdf: u32,
+    /// A conductor's complex index of refraction, real part per channel; all 0 reflects
+    /// with Schlick's Fresnel from the base colour (times `specular`) as glTF's metals do.
+    pub eta: [f32; 3],
+    /// The index of refraction of a dielectric, or of a plastic's coating (inside over
+    /// outside, the side the winding's normal points to being outside).
+    pub ior: f32,
+    /// A conductor's complex index of refraction, imaginary part (absorption) per channel.
+    pub k: [f32; 3],
+    /// Keeps the rows whole; 0.
+    pub reserved: u32,
+}
+
+/// Metals by name, for [`Material::eta`] and [`Material::k`]: complex indices of refraction
+/// at about 650, 550 and 450 nm (red, green, blue), from measured data (Johnson and
+/// Christy 1972; Rakic et al. 1998) as renderers commonly tabulate them.
+pub const CONDUCTORS: [(&str, [f32; 3], [f32; 3]); 6] = [
+    ("gold", [0.143, 0.374, 1.442], [3.983, 2.385, 1.603]),
+    ("silver", [0.155, 0.117, 0.138], [4.828, 3.122, 2.147]),
+    ("copper", [0.200, 0.924, 1.102], [3.912, 2.452, 2.142]),
+    ("aluminium", [1.657, 0.880, 0.521], [9.224, 6.270, 4.837]),
+    ("iron", [2.911, 2.950, 2.585], [3.089, 2.932, 2.767]),
+    ("chromium", [3.105, 3.186, 2.315], [3.323, 3.320, 3.139]),
+];
+
+/// The scattering models ([`Material::bsdf`]); src/render/bsdf.rs is the host's version of
+/// cl/bsdf.cl, which evaluates and samples them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Bsdf {
+    /// Lambertian: the base colour over pi.
+    Diffuse,
+    /// A metal: GGX microfacets (smooth below a roughness of about 0.03) with a conductor's
+    /// Fresnel reflectance.
+    Conductor,
+    /// Glass and water: GGX microfacets that reflect or refract, with Fresnel and total
+    /// internal reflection; smooth below a roughness of about 0.03.
+    Dielectric,
+    /// A window pane: a smooth dielectric sheet of no thickness, reflecting and passing
+    /// light straight through (its inner reflections summed).
+    ThinDielectric,
+    /// A diffuse base under a GGX dielectric coating.
+    Plastic,
+}
+
+impl Bsdf {
+    /// Every model, in code order.
+    pub const ALL: [Bsdf; 5] = [
+        Bsdf::Diffuse,
+        Bsdf::Conductor,
+        Bsdf::Dielectric,
+        Bsdf::ThinDielectric,
+        Bsdf::Plastic,
+    ];
+
+    /// Its [`Material::bsdf`] code (`BSDF_*` in the kernels).
+    pub const fn code(self) -> u32 {
+        self as u32
+    }
+
+    /// The model of a code; diffuse for an unknown one.
+    pub fn from_code(code: u32) -> Bsdf {
+        Bsdf::ALL.get(code as usize).copied().unwrap_or(Bsdf::Diffuse)
+    }
+
+    /// Its name in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Bsdf::Diffuse => "diffuse",
+            Bsdf::Conductor => "conductor",
+            Bsdf::Dielectric => "dielectric",
+            Bsdf::ThinDielectric => "thin-dielectric",
+            Bsdf::Plastic => "plastic",
+        }
+    }
 }
 
 impl Material {
@@ -72,6 +151,22 @@ impl Material {
             alpha_texture: NO_TEXTURE,
             alpha_cutoff: 0.5,
             occlusion_texture: NO_TEXTURE,
+            specular: [1.0; 3],
+            bsdf: Bsdf::Diffuse.code(),
+            eta: [0.0; 3],
+            ior: 1.5,
+            k: [0.0; 3],
+            reserved: 0,
+        }
+    }
+
+    /// A material of model `bsdf` with base colour `albedo` and perceptual roughness
+    /// `roughness` (0 smooth, 1 rough), the rest as [`Material::diffuse`]'s.
+    pub fn with_bsdf(bsdf: Bsdf, albedo: [f32; 3], roughness: f32) -> Self {
+        Material {
+            bsdf: bsdf.code(),
+            roughness,
+            ..Material::diffuse(albedo)
         }
     }
 

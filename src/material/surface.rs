@@ -71,6 +71,12 @@ pub struct SurfacePoint {
     pub albedo: Vec3,
     /// Emitted radiance: factor and texture.
     pub emission: Vec3,
+    /// Perceptual roughness: factor and texture (glTF's green channel).
+    pub roughness: f32,
+    /// Metalness: factor and texture (glTF's blue channel).
+    pub metallic: f32,
+    /// Whether the ray hit the side the winding's normal points to.
+    pub front_face: bool,
 }
 
 fn dot3(a: Vec3, b: Vec3) -> f32 {
@@ -214,6 +220,7 @@ impl Surface {
         } else {
             Vec3::ZERO
         };
+        let (mut roughness, mut metallic) = (m.roughness, m.metallic);
         if self.flags == 0 {
             return SurfacePoint {
                 origin: org + dir * t + ng * offset,
@@ -222,6 +229,9 @@ impl Surface {
                 normal: front,
                 albedo,
                 emission,
+                roughness,
+                metallic,
+                front_face: !back,
             };
         }
         let w = WatertightRay::new(&crate::geometry::Ray::new(org, dir)).barycentrics(tri);
@@ -278,6 +288,11 @@ impl Surface {
             if m.emission_texture != NO_TEXTURE && shines {
                 emission *= self.footprint(m.emission_texture, uv, lod_base);
             }
+            if m.metallic_roughness_texture != NO_TEXTURE {
+                let mr = self.footprint(m.metallic_roughness_texture, uv, lod_base);
+                roughness *= mr.y;
+                metallic *= mr.z;
+            }
         }
         if self.flags & SURFACE_COLORS != 0 {
             let c = |i| Self::vec3(&self.colors, i);
@@ -301,7 +316,18 @@ impl Surface {
             normal: n,
             albedo,
             emission,
+            roughness,
+            metallic,
+            front_face: !back,
         }
+    }
+
+    /// Triangle `tri`'s material; the default for a surface without materials.
+    pub fn material(&self, tri: &Triangle) -> Material {
+        self.materials
+            .get(tri.material as usize)
+            .copied()
+            .unwrap_or_default()
     }
 
     /// `shading_normal` in cl/surface.cl: the unit shading normal at a primary hit for the

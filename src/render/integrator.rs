@@ -18,6 +18,7 @@ use crate::intersect::ClosestHit;
 use crate::intersect::{TRIANGLE_TWO_SIDED, Triangle};
 use crate::material::Material;
 use crate::material::surface::{BOUNCE_CONE_SPREAD, Surface};
+use super::bsdf::{BSDF_DIFFUSE, BsdfSample, Shading, basis};
 
 /// Share of the light in `shadow` mode that reaches surfaces the light does not.
 pub const SHADOW_AMBIENT: f32 = 0.1;
@@ -315,6 +316,9 @@ pub(crate) fn sample_pixel(
             let mut hit = Some((i, t));
             let mut bounce = 0;
             let mut cone = 0.0;
+            // The density of the last bounce's direction, for the power heuristic; 0 where
+            // light sampling could not have found what it hits (see cl/integrator.cl).
+            let mut last_pdf = 0.0f32;
             loop {
                 let Some((i, t)) = hit else {
                     if emitters.is_empty() {
@@ -327,14 +331,25 @@ pub(crate) fn sample_pixel(
                     _ => cone + BOUNCE_CONE_SPREAD * t,
                 };
                 let sp = hit_point(i, &ray, t, cone);
-                if bounce == 0 {
-                    // Later bounces reach emitters through next-event estimation instead.
+                if last_pdf > 0.0 && sp.emission.max_element() > 0.0 {
+                    let ng = sp.ng;
+                    let cos = (ng.x * ray.dir.x + ng.y * ray.dir.y + ng.z * ray.dir.z).abs();
+                    let r = t * t / (cos * emitters.total_area) / last_pdf;
+                    radiance += throughput * sp.emission * (1.0 / (1.0 + r * r));
+                } else if last_pdf == 0.0 {
                     radiance += throughput * sp.emission;
                 }
-                let (origin, albedo, n, ng) = (sp.origin, sp.albedo, sp.ns, sp.ng);
-                let above = |d: Vec3| d.x * ng.x + d.y * ng.y + d.z * ng.z > 0.0;
+                let sh = Shading::at(&surface.material(&tris[i]), &sp);
+                let lambert = sh.bsdf == BSDF_DIFFUSE && !(sh.metallic > 0.0);
+                let (origin, n, ng) = (sp.origin, sp.ns, sp.ng);
+                let (tn, bn) = basis(n);
+                let wo = -ray.dir.normalize();
+                let local = |v: Vec3| Vec3::new(v.dot(tn), v.dot(bn), v.dot(n));
+                let wo_l = local(wo);
+                let side = |d: Vec3| d.x * ng.x + d.y * ng.y + d.z * ng.z;
+                let last = bounce == max_bounces;
                 let dim = bounce_dim(bounce);
-                if !emitters.is_empty() {
+                if !emitters.is_empty() && !sh.all_delta() {
                     let e = &tris[emitters.triangles[emitters.pick(s.get(dim))] as usize];
                     let (u1, u2) = (s.get(dim + 1), s.get(dim + 2));
                     let q = triangle_point(
@@ -347,23 +362,50 @@ pub(crate) fn sample_pixel(
                     let w = q - origin;
                     let d2 = w.length_squared();
                     let l = w / d2.sqrt();
-                    let cos_here = n.dot(l);
                     let cos_there = emitting_normal(e, l).dot(-l);
-                    if cos_here > 0.0 && cos_there > 0.0 && above(l) {
-                        rays += 1;
-                        if !occluded(&Ray::new(origin, l), d2.sqrt() * (1.0 - 1e-4)) {
-                            let su = u1.sqrt();
-                            let le = surface.emitted(e, 1.0 - su, u2 * su);
-                            radiance += throughput * albedo / PI
-                                * le
-                                * (cos_here * cos_there / d2 * emitters.total_area);
+                    if cos_there > 0.0 && side(l) > 0.0 {
+                        let (f, bsdf_pdf) = if lambert {
+                            let cos_here = n.dot(l).max(0.0);
+                            (sh.albedo * (cos_here / PI), cos_here / PI)
+                        } else {
+                            sh.eval(wo_l, local(l))
+                        };
+                        if f.max_element() > 0.0 {
+                            rays += 1;
+                            if !occluded(&Ray::new(origin, l), d2.sqrt() * (1.0 - 1e-4)) {
+                                let su = u1.sqrt();
+                                let le = surface.emitted(e, 1.0 - su, u2 * su);
+                                let light_pdf = d2 / (cos_there * emitters.total_area);
+                                let r = bsdf_pdf / light_pdf;
+                                // The last bounce samples no direction: light samples count whole.
+                                let weight = if last { 1.0 } else { 1.0 / (1.0 + r * r) };
+                                radiance += throughput * f * le * (weight / light_pdf);
+                            }
                         }
                     }
                 }
-                if bounce == max_bounces {
+                if last {
                     break;
                 }
-                throughput *= albedo;
+                let (u1, u2) = (s.get(dim + 4), s.get(dim + 5));
+                let bs = if lambert {
+                    let wi = cosine_direction(n, u1, u2);
+                    BsdfSample {
+                        wi,
+                        weight: sh.albedo,
+                        pdf: wi.dot(n).max(0.0) / PI,
+                        delta: false,
+                        transmitted: false,
+                    }
+                } else {
+                    let Some(mut bs) = sh.sample(wo_l, s.get(dim + 6), u1, u2, s.get(dim + 7))
+                    else {
+                        break;
+                    };
+                    bs.wi = tn * bs.wi.x + bn * bs.wi.y + n * bs.wi.z;
+                    bs
+                };
+                throughput *= bs.weight;
                 if bounce >= ROULETTE_AFTER {
                     let keep = throughput.max_element().min(0.95);
                     if s.get(dim + 3) >= keep {
@@ -371,11 +413,19 @@ pub(crate) fn sample_pixel(
                     }
                     throughput /= keep;
                 }
-                ray = Ray::new(origin, cosine_direction(n, s.get(dim + 4), s.get(dim + 5)));
-                // A direction below the geometric surface would leave through it.
-                if !above(ray.dir) {
+                // A reflected direction below the geometric surface would leave through
+                // it, a refracted one above it would not.
+                let cos = side(bs.wi);
+                if (bs.transmitted && cos >= 0.0) || (!bs.transmitted && cos <= 0.0) {
                     break;
                 }
+                let from = if bs.transmitted {
+                    origin - ng * (2.0 * settings.offset)
+                } else {
+                    origin
+                };
+                ray = Ray::new(from, bs.wi);
+                last_pdf = if bs.delta || bs.transmitted { 0.0 } else { bs.pdf };
                 rays += 1;
                 hit = trace_masked(tracer, surface, &ray, f32::INFINITY, false);
                 bounce += 1;

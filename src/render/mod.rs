@@ -1,6 +1,7 @@
 //! Rendering: one frame of per-pixel closest hits and colours, by brute force or through
 //! a BVH, on the CPU or on an OpenCL device. Every method fills the same [`Frame`].
 
+pub mod bsdf;
 pub mod cpu;
 pub mod integrator;
 pub mod sampling;
