@@ -67,11 +67,19 @@ def box(lo, hi):
     return tris
 
 
-def uv_sphere(center, radius, segments, rings):
-    """A UV sphere of flat triangles (faces facing out); the poles are fans."""
+def uv_sphere(center, radius, segments, rings, closed=False):
+    """A UV sphere of flat triangles (faces facing out); the poles are fans. Without
+    `closed`, each pole's fan is degenerate (its triangles have two corners on the pole), so
+    that the sphere is open there: the diffuse `sphere` scene's references were made so and
+    are kept; the scenes of other materials (a dielectric needs a closed surface) close it."""
     cx, cy, cz = center
 
     def point(i, j):
+        if closed:
+            # One point per vertex: the seam's (i = segments) is i = 0's, the poles exact.
+            i %= segments
+            if j in (0, rings):
+                return (cx, cy + (radius if j == 0 else -radius), cz)
         theta = math.pi * j / rings
         phi = 2.0 * math.pi * i / segments
         return (
@@ -85,19 +93,31 @@ def uv_sphere(center, radius, segments, rings):
         for i in range(segments):
             a, b = point(i, j), point(i + 1, j)
             c, d = point(i + 1, j + 1), point(i, j + 1)
-            if j > 0:
-                tris.append((a, d, c))
-            if j < rings - 1:
-                tris.append((a, c, b))
+            top, bottom = (j < rings - 1, j > 0) if closed else (j > 0, j < rings - 1)
+            if top:
+                tris.append((a, d, c))  # d == c on the south pole: skipped there
+            if bottom:
+                tris.append((a, c, b))  # a == b on the north pole: skipped there
     return tris
 
 
-def obj(name, material, tris, uvs=None):
-    return {"name": name, "material": material, "tris": tris, "uvs": uvs}
+def obj(name, material, tris, uvs=None, shared=False):
+    """`shared`: the OBJ file lists each distinct vertex once (smaller, and watertight by
+    construction) rather than three vertices a triangle (no uvs then)."""
+    assert not (shared and uvs)
+    return {"name": name, "material": material, "tris": tris, "uvs": uvs, "shared": shared}
 
 
-def material(kd, ke=(0.0, 0.0, 0.0), map_kd=None):
-    return {"kd": tuple(kd), "ke": tuple(ke), "map_kd": map_kd}
+def material(kd, ke=(0.0, 0.0, 0.0), map_kd=None, bsdf=None):
+    """`bsdf`: None (diffuse, from the MTL) or a dict: "type" (cltrace's `bsdf` name:
+    conductor, dielectric, thin-dielectric, plastic), "roughness" (cltrace's perceptual one,
+    Mitsuba's alpha its square; below SMOOTH_ROUGHNESS the smooth Mitsuba plugin), and by
+    type "eta", "k" (conductor, RGB), "ior" (dielectric, plastic); kd is then the plastic's
+    diffuse reflectance (and unused by the others)."""
+    return {"kd": tuple(kd), "ke": tuple(ke), "map_kd": map_kd, "bsdf": bsdf}
+
+
+SMOOTH_ROUGHNESS = 0.03  # cltrace: below this roughness a lobe is a delta (bsdf.rs)
 
 
 WHITE = material((0.75, 0.75, 0.75))
@@ -164,6 +184,57 @@ def sphere_scene():
     }
 
 
+def material_scene(name, sphere_material, doc, max_bounces=8):
+    """The sphere scene's setup with a closed faceted sphere of another material."""
+    s, h = 0.5, 2.0
+    return {
+        "name": name,
+        "doc": doc,
+        "objects": [
+            obj("floor", WHITE, quad((-2, 0, 2), (2, 0, 2), (2, 0, -2), (-2, 0, -2))[0]),
+            obj("sphere", sphere_material, uv_sphere((0.0, 0.5, 0.0), 0.5, 16, 10, closed=True), shared=True),
+            obj("light", light(8.0), quad((-s, h, -s), (s, h, -s), (s, h, s), (-s, h, s))[0]),
+        ],
+        "camera": {"eye": (0.0, 1.3, 2.6), "look_at": (0.0, 0.45, 0.0), "up": (0, 1, 0), "fov": 40.0},
+        "max_bounces": max_bounces,
+    }
+
+
+GOLD = {"eta": (0.143, 0.374, 1.442), "k": (3.983, 2.385, 1.603)}
+SILVER = {"eta": (0.155, 0.117, 0.138), "k": (4.828, 3.122, 2.147)}
+PLASTIC_ALBEDO = (0.2, 0.4, 0.8)
+
+
+def gold_scene():
+    m = material((1, 1, 1), bsdf={"type": "conductor", "roughness": 0.5, **GOLD})
+    return material_scene("gold", m, "rough gold conductor (GGX, roughness 0.5: alpha 0.25)")
+
+
+def mirror_scene():
+    m = material((1, 1, 1), bsdf={"type": "conductor", "roughness": 0.0, **SILVER})
+    return material_scene("mirror", m, "smooth silver conductor (a mirror)")
+
+
+def glass_scene():
+    m = material((1, 1, 1), bsdf={"type": "dielectric", "roughness": 0.0, "ior": 1.5})
+    return material_scene("glass", m, "smooth dielectric, ior 1.5", max_bounces=12)
+
+
+def rough_glass_scene():
+    m = material((1, 1, 1), bsdf={"type": "dielectric", "roughness": 0.4, "ior": 1.5})
+    return material_scene("rough-glass", m, "rough dielectric (GGX, roughness 0.4), ior 1.5", max_bounces=12)
+
+
+def plastic_scene():
+    m = material(PLASTIC_ALBEDO, bsdf={"type": "plastic", "roughness": 0.0, "ior": 1.5})
+    return material_scene("plastic", m, "smooth plastic, ior 1.5")
+
+
+def rough_plastic_scene():
+    m = material(PLASTIC_ALBEDO, bsdf={"type": "plastic", "roughness": 0.4, "ior": 1.5})
+    return material_scene("rough-plastic", m, "rough plastic (GGX, roughness 0.4), ior 1.5")
+
+
 CHECKER = 4  # squares per side of the textured scene's checkerboard
 CHECKER_TEXELS = 2  # texels per square: magnified everywhere in the image, so that cltrace
 # reads mip level 0 (bilinear, as Mitsuba, which has no mip maps) and not a blurrier level
@@ -191,7 +262,21 @@ def textured_scene():
     }
 
 
-SCENES = {s()["name"]: s for s in (cornell, quad_scene, sphere_scene, textured_scene)}
+SCENES = {
+    s()["name"]: s
+    for s in (
+        cornell,
+        quad_scene,
+        sphere_scene,
+        textured_scene,
+        gold_scene,
+        mirror_scene,
+        glass_scene,
+        rough_glass_scene,
+        plastic_scene,
+        rough_plastic_scene,
+    )
+}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -299,6 +384,18 @@ def write_inputs(scene, out, width, height, spp, seed=0):
             f.write(f"# {scene['name']}/{o['name']}: written by scripts/mitsuba/compare.py\n")
             f.write("mtllib scene.mtl\n")
             f.write(f"o {o['name']}\nusemtl {o['name']}\n")
+            if o["shared"]:
+                index = {}
+                for t in o["tris"]:
+                    for p in t:
+                        v = " ".join(fmt_obj(x) for x in p)
+                        if v not in index:
+                            index[v] = len(index) + 1
+                            f.write(f"v {v}\n")
+                for t in o["tris"]:
+                    f.write("f " + " ".join(str(index[" ".join(fmt_obj(x) for x in p)]) for p in t) + "\n")
+                paths.append(path)
+                continue
             for t in o["tris"]:
                 for p in t:
                     f.write("v " + " ".join(fmt_obj(x) for x in p) + "\n")
@@ -320,6 +417,8 @@ def write_inputs(scene, out, width, height, spp, seed=0):
         f.write("# as the Mitsuba scene of its references (scripts/mitsuba/README.md).\n")
         for o in scene["objects"]:
             f.write(f'\n[[mesh]]\nfile = "{o["name"]}.obj"\n')
+            if o["material"]["bsdf"]:
+                f.write(f"material = {toml_material(o['material'])}\n")
         f.write("\n[camera]\n")
         f.write(f"eye = {vec(cam['eye'])}\nlook_at = {vec(cam['look_at'])}\nup = {vec(cam['up'])}\n")
         f.write(f"fov = {fmt(cam['fov'])}\nwidth = {width}\nheight = {height}\n")
@@ -327,6 +426,40 @@ def write_inputs(scene, out, width, height, spp, seed=0):
         f.write(f"spp = {spp}\nseed = {seed}\nmax_bounces = {scene['max_bounces']}\n")
         f.write("crease_angle = 0.0\ntwo_sided_lights = false\n")
     return paths
+
+
+def toml_material(m):
+    """A `[[mesh]]` table's `material` (overriding the MTL) of a material with a bsdf."""
+    b = m["bsdf"]
+    vec = lambda v: "[" + ", ".join(fmt(x) for x in v) + "]"  # noqa: E731
+    keys = [f"albedo = {vec(m['kd'])}", f'bsdf = "{b["type"]}"', f"roughness = {fmt(b['roughness'])}"]
+    if "ior" in b:
+        keys.append(f"ior = {fmt(b['ior'])}")
+    if "eta" in b:
+        keys += [f"eta = {vec(b['eta'])}", f"k = {vec(b['k'])}"]
+    return "{ " + ", ".join(keys) + " }"
+
+
+def mitsuba_bsdf(m):
+    """The Mitsuba bsdf of a material with a bsdf (cltrace's model, bsdf.rs)."""
+    b = m["bsdf"]
+    rgb = lambda v: {"type": "rgb", "value": list(v)}  # noqa: E731
+    smooth = b["roughness"] < SMOOTH_ROUGHNESS
+    rough = {"distribution": "ggx", "alpha": b["roughness"] ** 2, "sample_visible": True}
+    kind = b["type"]
+    if kind == "conductor":
+        d = {"type": "conductor", "eta": rgb(b["eta"]), "k": rgb(b["k"])}
+        return d if smooth else {**d, "type": "roughconductor", **rough}
+    if kind == "dielectric":
+        d = {"type": "dielectric", "int_ior": b["ior"], "ext_ior": 1.0}
+        return d if smooth else {**d, "type": "roughdielectric", **rough}
+    if kind == "thin-dielectric":
+        return {"type": "thindielectric", "int_ior": b["ior"], "ext_ior": 1.0}
+    if kind == "plastic":
+        d = {"type": "plastic", "diffuse_reflectance": rgb(m["kd"]), "int_ior": b["ior"], "ext_ior": 1.0,
+             "nonlinear": False}
+        return d if smooth else {**d, "type": "roughplastic", **rough}
+    raise ValueError(f"no Mitsuba bsdf for {kind!r}")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -387,7 +520,11 @@ def mitsuba_scene(mi, scene, out, width, height, spp, max_bounces):
             "filename": os.path.join(out, o["name"] + ".obj"),
             "face_normals": True,
         }
-        if any(m["ke"]):
+        if m["bsdf"]:
+            # Not wrapped in `twosided`: the scenes' conductors and plastics are closed
+            # spheres (only front faces seen), and dielectrics are one-sided in both.
+            shape["bsdf"] = mitsuba_bsdf(m)
+        elif any(m["ke"]):
             # One-sided, as cltrace's emitters (front face only); albedo 0 in both.
             shape["bsdf"] = {"type": "diffuse", "reflectance": reflectance}
             shape["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": list(m["ke"])}}
