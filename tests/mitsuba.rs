@@ -247,6 +247,46 @@ fn textured_quad_regions_match_mitsuba() {
     regions_match_mitsuba("textured");
 }
 
+// The materials (cltrace's BSDF models with MIS): a closed faceted sphere of each on the
+// sphere scene's floor, under its emitter (compare.py's `material_scene`).
+
+#[test]
+fn rough_gold_sphere_regions_match_mitsuba() {
+    regions_match_mitsuba("gold");
+}
+
+#[test]
+fn smooth_silver_mirror_sphere_regions_match_mitsuba() {
+    regions_match_mitsuba("mirror");
+}
+
+#[test]
+fn smooth_glass_sphere_regions_match_mitsuba() {
+    regions_match_mitsuba("glass");
+}
+
+#[test]
+fn rough_glass_sphere_regions_match_mitsuba() {
+    regions_match_mitsuba("rough-glass");
+}
+
+#[test]
+fn smooth_plastic_sphere_regions_match_mitsuba() {
+    regions_match_mitsuba("plastic");
+}
+
+/// Fails by design of the two models, not of cltrace's code: Mitsuba's `roughplastic` scales
+/// its diffuse base by a precomputed rough transmittance and a rough internal reflectance
+/// where cltrace keeps the smooth Fresnel terms of `plastic`, so cltrace's sphere is 13 to 17%
+/// brighter (most in blue, where the base dominates); against a Mitsuba sum of
+/// `roughplastic`'s coating alone and `plastic`'s base alone (cltrace's model) it agrees
+/// within 0.8% (scripts/mitsuba/README.md).
+#[test]
+#[ignore = "Mitsuba's roughplastic base (rough transmittance and internal reflectance) is a different model: cltrace 13-17% brighter on the sphere"]
+fn rough_plastic_sphere_regions_match_mitsuba() {
+    regions_match_mitsuba("rough-plastic");
+}
+
 /// The comparison can fail: the quad scene with its floor's albedo 10% too dark (a copy of
 /// its files, one `Kd` changed) is rejected on the floor, and only there (the emitter's
 /// back, black in both, still agrees).
