@@ -287,6 +287,19 @@ fn rough_plastic_sphere_regions_match_mitsuba() {
     regions_match_mitsuba("rough-plastic");
 }
 
+/// cltrace's rough plastic against Mitsuba's rendering of the same model: `roughplastic`'s
+/// coating alone plus `plastic`'s base alone (compare.py's "split" correspondence), which
+/// holds the rough coating (GGX, dielectric Fresnel) and the base to cltrace's definitions.
+#[test]
+fn rough_plastic_sphere_regions_match_mitsubas_coating_plus_smooth_base() {
+    regions_match_mitsuba("rough-plastic-split");
+}
+
+#[test]
+fn thin_dielectric_pane_regions_match_mitsuba() {
+    regions_match_mitsuba("pane");
+}
+
 /// The comparison can fail: the quad scene with its floor's albedo 10% too dark (a copy of
 /// its files, one `Kd` changed) is rejected on the floor, and only there (the emitter's
 /// back, black in both, still agrees).

@@ -235,6 +235,38 @@ def rough_plastic_scene():
     return material_scene("rough-plastic", m, "rough plastic (GGX, roughness 0.4), ior 1.5")
 
 
+def rough_plastic_split_scene():
+    m = material(PLASTIC_ALBEDO, bsdf={"type": "plastic", "roughness": 0.4, "ior": 1.5, "mitsuba": "split"})
+    return material_scene(
+        "rough-plastic-split", m,
+        "rough plastic as cltrace models it: Mitsuba's roughplastic coating alone plus plastic's (smooth) base alone",
+    )
+
+
+def pane_scene():
+    """The diffuse sphere (closed) on the floor under the emitter, and in front of its left
+    half a thin dielectric pane (ior 1.5), leaning back by 20 degrees, its front face towards
+    the camera: the sphere and floor through it, the emitter's reflection in it, and its
+    shadow (light through it, found by BSDF sampling only in both) on the floor."""
+    s, h = 0.5, 2.0
+    lean = math.radians(20.0)
+    x0, x1, z, y1 = -0.9, 0.05, 0.9, 1.1
+    top_z = z - y1 * math.tan(lean)
+    pane = material((1, 1, 1), bsdf={"type": "thin-dielectric", "roughness": 0.0, "ior": 1.5})
+    return {
+        "name": "pane",
+        "doc": "thin dielectric pane, ior 1.5",
+        "objects": [
+            obj("floor", WHITE, quad((-2, 0, 2), (2, 0, 2), (2, 0, -2), (-2, 0, -2))[0]),
+            obj("sphere", material((0.3, 0.5, 0.8)), uv_sphere((0.0, 0.5, 0.0), 0.5, 16, 10, closed=True), shared=True),
+            obj("pane", pane, quad((x0, 0.0, z), (x1, 0.0, z), (x1, y1, top_z), (x0, y1, top_z))[0]),  # faces +z, up
+            obj("light", light(8.0), quad((-s, h, -s), (s, h, -s), (s, h, s), (-s, h, s))[0]),
+        ],
+        "camera": {"eye": (0.0, 1.3, 2.6), "look_at": (0.0, 0.45, 0.0), "up": (0, 1, 0), "fov": 40.0},
+        "max_bounces": 8,
+    }
+
+
 CHECKER = 4  # squares per side of the textured scene's checkerboard
 CHECKER_TEXELS = 2  # texels per square: magnified everywhere in the image, so that cltrace
 # reads mip level 0 (bilinear, as Mitsuba, which has no mip maps) and not a blurrier level
@@ -275,6 +307,8 @@ SCENES = {
         rough_glass_scene,
         plastic_scene,
         rough_plastic_scene,
+        rough_plastic_split_scene,
+        pane_scene,
     )
 }
 
@@ -455,6 +489,17 @@ def mitsuba_bsdf(m):
         return d if smooth else {**d, "type": "roughdielectric", **rough}
     if kind == "thin-dielectric":
         return {"type": "thindielectric", "int_ior": b["ior"], "ext_ior": 1.0}
+    if kind == "plastic" and b.get("mitsuba") == "split" and not smooth:
+        # cltrace's rough plastic: roughplastic's coating (F D G / (4 cos_o), its base off)
+        # plus plastic's base (smooth Fresnel terms, its coating off), summed as a blend of
+        # weight 0.8 of each scaled by 1 / its weight (reflectances must stay in [0, 1]).
+        w = 0.8
+        coat = {"type": "roughplastic", **rough, "diffuse_reflectance": rgb((0, 0, 0)),
+                "specular_reflectance": 1.0 / (1.0 - w), "int_ior": b["ior"], "ext_ior": 1.0, "nonlinear": False}
+        base = {"type": "plastic", "diffuse_reflectance": rgb([x / w for x in m["kd"]]), "specular_reflectance": 0.0,
+                "int_ior": b["ior"], "ext_ior": 1.0, "nonlinear": False}
+        assert max(m["kd"]) <= w
+        return {"type": "blendbsdf", "weight": w, "bsdf_0": coat, "bsdf_1": base}
     if kind == "plastic":
         d = {"type": "plastic", "diffuse_reflectance": rgb(m["kd"]), "int_ior": b["ior"], "ext_ior": 1.0,
              "nonlinear": False}
