@@ -217,12 +217,12 @@ def mirror_scene():
 
 def glass_scene():
     m = material((1, 1, 1), bsdf={"type": "dielectric", "roughness": 0.0, "ior": 1.5})
-    return material_scene("glass", m, "smooth dielectric, ior 1.5", max_bounces=12)
+    return material_scene("glass", m, "smooth dielectric, ior 1.5", max_bounces=24)
 
 
 def rough_glass_scene():
     m = material((1, 1, 1), bsdf={"type": "dielectric", "roughness": 0.4, "ior": 1.5})
-    return material_scene("rough-glass", m, "rough dielectric (GGX, roughness 0.4), ior 1.5", max_bounces=12)
+    return material_scene("rough-glass", m, "rough dielectric (GGX, roughness 0.4), ior 1.5", max_bounces=24)
 
 
 def plastic_scene():
