@@ -340,6 +340,6 @@ FORCE_INLINE Shading shading_at(const __global Material* m, const SurfacePoint* 
     s.k = load3(m->k);
     s.ior = m->bsdf == BSDF_DIELECTRIC && !sp->front_face ? 1.0f / m->ior : m->ior;
     s.alpha = sp->roughness * sp->roughness;
-    s.metallic = clamp(sp->metallic, 0.0f, 1.0f);
+    s.metallic = sp->metallic > 0.0f ? fmin(sp->metallic, 1.0f) : 0.0f; /* NaN as 0 */
     return s;
 }

@@ -168,16 +168,17 @@ __kernel void sample_path(SAMPLE_PARAMS) {
         } else if (last_pdf == 0.0f) {
             radiance += throughput * sp.emission;
         }
+        /* The last bounce's direction was traced only for the emitter it might hit. */
+        if (bounce > max_bounces) break;
         Shading sh = shading_at(&materials[tri->material], &sp);
         /* Lambert alone takes the short way: no local frame. */
-        bool lambert = sh.bsdf == BSDF_DIFFUSE && !(sh.metallic > 0.0f);
+        bool lambert = sh.bsdf == BSDF_DIFFUSE && sh.metallic <= 0.0f;
         float3 origin = sp.origin;
         float3 n = sp.ns;
         float3 tn, bn;
         basis(n, &tn, &bn);
         float3 wo = -normalize(dir);
         float3 wo_l = (float3)(dot(wo, tn), dot(wo, bn), dot(wo, n));
-        bool last = bounce == max_bounces;
         uint d = bounce_dim(bounce);
         if (emitter_count > 0 && !shading_all_delta(&sh)) {
             const __global Triangle* e = &tris[emitters[pick_emitter(emitter_cdf, emitter_count, sample_1d(key, d))]];
@@ -204,13 +205,11 @@ __kernel void sample_path(SAMPLE_PARAMS) {
                         float light_pdf = d2 / (cos_there * emitter_area);
                         /* The last bounce samples no direction: light samples count whole. */
                         float r = bsdf_pdf / light_pdf;
-                        float weight = last ? 1.0f : 1.0f / (1.0f + r * r);
-                        radiance += throughput * f * emitted(SURFACE, e, 1.0f - su, u2 * su) * (weight / light_pdf);
+                        radiance += throughput * f * emitted(SURFACE, e, 1.0f - su, u2 * su) * (1.0f / (1.0f + r * r) / light_pdf);
                     }
                 }
             }
         }
-        if (last) break;
         float u1 = sample_1d(key, d + 4), u2 = sample_1d(key, d + 5);
         BsdfSample bs;
         if (lambert) {

@@ -19,11 +19,11 @@ use cltrace::intersect::{ROBUST_EXIT, Triangle};
 
 use cltrace::material::texture::TextureInfo;
 use cltrace::material::{Material, Wrap, surface};
+use cltrace::render::bsdf;
 use cltrace::render::integrator::{
     Accumulation, Lighting, MAX_SAMPLE_RADIANCE, RADIANCE_SCALE, ROULETTE_AFTER, SHADOW_AMBIENT,
     SampleSettings,
 };
-use cltrace::render::bsdf;
 use cltrace::render::sampling::{DIMS_PER_BOUNCE, LENS_DIM, LENS_TRIES};
 use cltrace::render::{Hit, MISS, Shade};
 use ocl::core::{KernelArgInfo, KernelArgInfoResult, KernelInfo, KernelInfoResult};

@@ -1186,6 +1186,58 @@ fn obj_materials_come_from_the_mtl_file() {
     assert_eq!(corners(&load_mesh(&obj).unwrap()), corners(&file.mesh));
 }
 
+/// The scattering model of each MTL material, as the table in docs/rendering.md maps it.
+#[test]
+fn mtl_illum_ks_ns_ni_tf_pr_and_pm_choose_the_scattering_model() {
+    use cltrace::material::Bsdf;
+    let library = "newmtl matte\nKd 0.5 0.5 0.5\nKs 0 0 0\nillum 2\n\
+                   newmtl glossy\nKd 0.2 0.3 0.8\nKs 0.5 0.5 0.5\nNs 250\nillum 2\n\
+                   newmtl chrome\nKd 0.9 0.9 0.9\nillum 3\n\
+                   newmtl brushed\nKd 0.9 0.9 0.9\nNs 90\nillum 5\n\
+                   newmtl glass\nNi 1.45\nTf 0.9 1 0.9\nillum 7\n\
+                   newmtl exported_glass\nNi 1.000000\nillum 4\n\
+                   newmtl window\nKd 0.4 0.6 0.6\nKs 0.5 0.5 0.5\nd 0.006\nillum 2\n\
+                   newmtl sheet\nillum 9\n\
+                   newmtl pbr\nKd 0.8 0.5 0.2\nPr 0.35\nPm 0.8\n\
+                   newmtl faded\nTr 0.5\n";
+    let list = cltrace::input::parse_material_library(library.as_bytes()).unwrap();
+    let by_name = |i: usize| (Bsdf::from_code(list[i].bsdf), list[i]);
+    let close = |a: f32, b: f32| (a - b).abs() < 1e-5;
+    let (b, m) = by_name(0);
+    assert_eq!(b, Bsdf::Diffuse, "Ks 0 under illum 2 is matte");
+    assert_eq!(m.roughness, 1.0);
+    let (b, m) = by_name(1);
+    assert_eq!(b, Bsdf::Plastic);
+    assert_eq!(m.specular, [0.5; 3], "Ks tints the coating");
+    assert!(close(m.roughness, 1.0 - 0.25f32.sqrt()), "{}", m.roughness);
+    assert_eq!(
+        (by_name(2).0, by_name(2).1.roughness),
+        (Bsdf::Conductor, 0.0)
+    );
+    let (b, m) = by_name(3);
+    assert_eq!(b, Bsdf::Conductor);
+    assert!(close(m.roughness, 1.0 - 0.09f32.sqrt()));
+    assert_eq!(
+        m.eta, [0.0; 3],
+        "a colour's Schlick Fresnel, as glTF metals"
+    );
+    let (b, m) = by_name(4);
+    assert_eq!(
+        (b, m.ior, m.specular, m.roughness),
+        (Bsdf::Dielectric, 1.45, [0.9, 1.0, 0.9], 0.0)
+    );
+    assert_eq!(
+        (by_name(5).0, by_name(5).1.ior),
+        (Bsdf::Dielectric, 1.5),
+        "Ni 1 is unset"
+    );
+    assert_eq!(by_name(6).0, Bsdf::ThinDielectric, "d below 1");
+    assert_eq!(by_name(7).0, Bsdf::ThinDielectric);
+    let (b, m) = by_name(8);
+    assert_eq!((b, m.roughness, m.metallic), (Bsdf::Plastic, 0.35, 0.8));
+    assert_eq!(by_name(9).0, Bsdf::ThinDielectric, "Tr above 0");
+}
+
 /// Regression: a folder without a mesh extension was refused as an "unknown mesh format";
 /// it is named a directory, with or without one.
 #[test]

@@ -275,18 +275,6 @@ fn smooth_plastic_sphere_regions_match_mitsuba() {
     regions_match_mitsuba("plastic");
 }
 
-/// Fails by design of the two models, not of cltrace's code: Mitsuba's `roughplastic` scales
-/// its diffuse base by a precomputed rough transmittance and a rough internal reflectance
-/// where cltrace keeps the smooth Fresnel terms of `plastic`, so cltrace's sphere is 13 to 17%
-/// brighter (most in blue, where the base dominates); against a Mitsuba sum of
-/// `roughplastic`'s coating alone and `plastic`'s base alone (cltrace's model) it agrees
-/// within 0.8% (scripts/mitsuba/README.md).
-#[test]
-#[ignore = "Mitsuba's roughplastic base (rough transmittance and internal reflectance) is a different model: cltrace 13-17% brighter on the sphere"]
-fn rough_plastic_sphere_regions_match_mitsuba() {
-    regions_match_mitsuba("rough-plastic");
-}
-
 /// cltrace's rough plastic against Mitsuba's rendering of the same model: `roughplastic`'s
 /// coating alone plus `plastic`'s base alone (compare.py's "split" correspondence), which
 /// holds the rough coating (GGX, dielectric Fresnel) and the base to cltrace's definitions.

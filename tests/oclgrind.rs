@@ -76,6 +76,45 @@ fn every_kernel_runs_clean_under_oclgrind() {
             }
         }
     }
+    // Every scattering model in the path tracer, under the sky.
+    let materials = dir.path().join("materials.toml");
+    let mut text = String::new();
+    for (x, material) in [
+        (-2.5, "bsdf = \"dielectric\", roughness = 0.3"),
+        (-1.25, "bsdf = \"dielectric\""),
+        (
+            0.0,
+            "bsdf = \"conductor\", metal = \"gold\", roughness = 0.4",
+        ),
+        (1.25, "bsdf = \"plastic\", metallic = 0.5, roughness = 0.2"),
+        (2.5, "bsdf = \"thin-dielectric\""),
+    ] {
+        text += &format!(
+            "[[mesh]]\ngenerator = {{ kind = \"sphere\", subdivisions = 1 }}\n\
+             translate = [{x}, 0.0, 0.0]\nscale = 0.5\nmaterial = {{ {material} }}\n"
+        );
+    }
+    text += "[ground]\n[camera]\neye = [0.0, 1.0, 4.0]\nlook_at = [0.0, 0.0, 0.0]\n";
+    std::fs::write(&materials, text).unwrap();
+    let args = [
+        "render",
+        materials.to_str().unwrap(),
+        "-q",
+        "-o",
+        png,
+        "--width",
+        "8",
+        "--height",
+        "6",
+        "--spp",
+        "2",
+        "--shade",
+        "path",
+    ];
+    let log = checked(&oclgrind, dir.path(), &args);
+    if !log.trim().is_empty() {
+        found.push(format!("{args:?}:\n{log}"));
+    }
     // The ray-buffer kernel: the bench's diffuse rays.
     let args = [
         "bench",

@@ -5,6 +5,7 @@
 mod common;
 
 mod bad_input_corpus;
+mod bsdf;
 mod bvh;
 mod bvh_optimize;
 mod camera;

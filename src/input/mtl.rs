@@ -11,7 +11,7 @@ use std::path::Path;
 use crate::error::Result;
 use crate::input::io_reason;
 use crate::input::texture::{ColorSpace, load_texture};
-use crate::material::{Material, Materials, Texture, Wrap};
+use crate::material::{Bsdf, Material, Materials, Texture, Wrap};
 
 /// Reads the material library `name` (as an OBJ's `mtllib` names it) beside `obj`. tobj
 /// keeps only an error's kind, so what went wrong, with the path tried, is added to
@@ -100,7 +100,90 @@ pub(super) fn convert(m: &tobj::Material) -> Material {
         _ => [0.0; 3],
     };
     let emission = emission.map(|c| if c.is_finite() { c.max(0.0) } else { 0.0 });
-    Material::emitting(albedo, emission)
+    let mut material = Material::emitting(albedo, emission);
+    scattering(m, &mut material);
+    material
+}
+
+/// A number of the MTL keys tobj does not know (`Pr`, `Pm`, `Tr`), if it is one.
+fn extra(m: &tobj::Material, key: &str) -> Option<f32> {
+    let v: f32 = m
+        .unknown_param
+        .get(key)?
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()?;
+    v.is_finite().then_some(v)
+}
+
+/// The scattering model of an MTL material, as common importers map it (the table in
+/// docs/rendering.md): `illum` 3 and 5 a conductor, 4, 6 and 7 a dielectric of index `Ni`
+/// tinted by `Tf`, 9 or a dissolve `d` below 1 (`Tr` above 0) a thin dielectric, 2 with a
+/// `Ks` above 0 a plastic whose coating `Ks` tints, `Ni` above 1 their index (else 1.5);
+/// roughness from `Pr`, else from `Ns`
+/// (1 - sqrt(Ns / 1000), as Blender's importer), metalness from `Pm` (the PBR extension:
+/// glTF's model, a plastic blended with a metal of the base colour).
+fn scattering(m: &tobj::Material, out: &mut Material) {
+    let unit = |v: f32| v.clamp(0.0, 1.0);
+    let ks = m
+        .specular
+        .filter(|k| k.iter().all(|c| c.is_finite()))
+        .map(|k| k.map(unit));
+    let opacity = m
+        .dissolve
+        .filter(|d| d.is_finite())
+        .or_else(|| extra(m, "Tr").map(|t| 1.0 - t));
+    let bsdf = match m.illumination_model {
+        Some(3 | 5) => Bsdf::Conductor,
+        Some(4 | 6 | 7) => Bsdf::Dielectric,
+        Some(9) => Bsdf::ThinDielectric,
+        _ if opacity.is_some_and(|d| d < 1.0) => Bsdf::ThinDielectric,
+        Some(2) if ks.is_some_and(|k| k.iter().any(|&c| c > 0.0)) => Bsdf::Plastic,
+        _ if m.unknown_param.contains_key("Pm") || m.unknown_param.contains_key("Pr") => {
+            Bsdf::Plastic
+        }
+        _ => Bsdf::Diffuse,
+    };
+    out.bsdf = bsdf.code();
+    let from_ns = m
+        .shininess
+        .filter(|s| s.is_finite())
+        .map(|ns| 1.0 - (ns.clamp(0.0, 1000.0) / 1000.0).sqrt());
+    out.roughness = match (extra(m, "Pr"), from_ns, bsdf) {
+        (Some(pr), _, _) => unit(pr),
+        (None, Some(r), Bsdf::Plastic | Bsdf::Conductor | Bsdf::Dielectric) => r,
+        // Mirrors and clear glass unless the file says otherwise.
+        (None, None, Bsdf::Conductor | Bsdf::Dielectric) => 0.0,
+        (None, _, _) => out.roughness,
+    };
+    if let Some(pm) = extra(m, "Pm") {
+        out.metallic = unit(pm);
+    }
+    // `Ni 1`, which exporters write when nothing was set, leaves the default 1.5.
+    if let Some(ni) = m
+        .optical_density
+        .filter(|n| n.is_finite() && *n > 1.0 && *n <= 16.0)
+    {
+        out.ior = ni;
+    }
+    match bsdf {
+        Bsdf::Plastic => out.specular = ks.unwrap_or([1.0; 3]),
+        Bsdf::Dielectric | Bsdf::ThinDielectric => {
+            if let Some(tf) = m.unknown_param.get("Tf") {
+                let v: Vec<f32> = tf
+                    .split_whitespace()
+                    .filter_map(|w| w.parse().ok())
+                    .collect();
+                if let [r, g, b] | [r @ g @ b] = v.as_slice()
+                    && [r, g, b].iter().all(|c| c.is_finite())
+                {
+                    out.specular = [unit(*r), unit(*g), unit(*b)];
+                }
+            }
+        }
+        _ => {}
+    }
 }
 
 /// The per-triangle materials of the models (in file order, `triangles[i]` triangles each)

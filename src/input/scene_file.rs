@@ -377,8 +377,7 @@ impl MaterialTable {
                     "material metal \"{name}\" and eta/k: give one or the other"
                 ));
             }
-            let Some((_, eta, k)) = crate::material::CONDUCTORS.iter().find(|c| c.0 == name)
-            else {
+            let Some((_, eta, k)) = crate::material::CONDUCTORS.iter().find(|c| c.0 == name) else {
                 let names: Vec<&str> = crate::material::CONDUCTORS.iter().map(|c| c.0).collect();
                 return Err(format!(
                     "material metal \"{name}\": not one of {}",
@@ -390,7 +389,9 @@ impl MaterialTable {
         for (key, value, slot) in [("eta", self.eta, &mut m.eta), ("k", self.k, &mut m.k)] {
             if let Some(v) = value {
                 if !v.iter().all(|c| c.is_finite() && (0.0..=100.0).contains(c)) {
-                    return Err(format!("material {key} {v:?}: each channel must be in [0, 100]"));
+                    return Err(format!(
+                        "material {key} {v:?}: each channel must be in [0, 100]"
+                    ));
                 }
                 *slot = v;
             }

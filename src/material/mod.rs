@@ -120,7 +120,10 @@ impl Bsdf {
 
     /// The model of a code; diffuse for an unknown one.
     pub fn from_code(code: u32) -> Bsdf {
-        Bsdf::ALL.get(code as usize).copied().unwrap_or(Bsdf::Diffuse)
+        Bsdf::ALL
+            .get(code as usize)
+            .copied()
+            .unwrap_or(Bsdf::Diffuse)
     }
 
     /// Its name in scene files.

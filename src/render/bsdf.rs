@@ -88,7 +88,12 @@ impl Shading {
                 m.ior
             },
             alpha: sp.roughness * sp.roughness,
-            metallic: sp.metallic.clamp(0.0, 1.0),
+            // NaN as 0.
+            metallic: if sp.metallic > 0.0 {
+                sp.metallic.min(1.0)
+            } else {
+                0.0
+            },
         }
     }
 
@@ -119,7 +124,8 @@ impl Shading {
     /// about all the light the coating lets in).
     fn plastic_base(&self, cos_o: f32, cos_i: f32) -> f32 {
         let eta = self.ior;
-        let through = (1.0 - fresnel_dielectric(cos_i, eta)) * (1.0 - fresnel_dielectric(cos_o, eta));
+        let through =
+            (1.0 - fresnel_dielectric(cos_i, eta)) * (1.0 - fresnel_dielectric(cos_o, eta));
         through / (eta * eta * (1.0 - fresnel_diffuse_reflectance(1.0 / eta)))
     }
 

@@ -9,6 +9,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::bsdf::{BSDF_DIFFUSE, BsdfSample, Shading, basis};
 use super::sampling::{
     LENS_DIM, Sampler, bounce_dim, cosine_direction, disk_point, triangle_point,
 };
@@ -18,7 +19,6 @@ use crate::intersect::ClosestHit;
 use crate::intersect::{TRIANGLE_TWO_SIDED, Triangle};
 use crate::material::Material;
 use crate::material::surface::{BOUNCE_CONE_SPREAD, Surface};
-use super::bsdf::{BSDF_DIFFUSE, BsdfSample, Shading, basis};
 
 /// Share of the light in `shadow` mode that reaches surfaces the light does not.
 pub const SHADOW_AMBIENT: f32 = 0.1;
@@ -339,15 +339,18 @@ pub(crate) fn sample_pixel(
                 } else if last_pdf == 0.0 {
                     radiance += throughput * sp.emission;
                 }
+                // The last bounce's direction was traced only for the emitter it might hit.
+                if bounce > max_bounces {
+                    break;
+                }
                 let sh = Shading::at(&surface.material(&tris[i]), &sp);
-                let lambert = sh.bsdf == BSDF_DIFFUSE && !(sh.metallic > 0.0);
+                let lambert = sh.bsdf == BSDF_DIFFUSE && sh.metallic <= 0.0;
                 let (origin, n, ng) = (sp.origin, sp.ns, sp.ng);
                 let (tn, bn) = basis(n);
                 let wo = -ray.dir.normalize();
                 let local = |v: Vec3| Vec3::new(v.dot(tn), v.dot(bn), v.dot(n));
                 let wo_l = local(wo);
                 let side = |d: Vec3| d.x * ng.x + d.y * ng.y + d.z * ng.z;
-                let last = bounce == max_bounces;
                 let dim = bounce_dim(bounce);
                 if !emitters.is_empty() && !sh.all_delta() {
                     let e = &tris[emitters.triangles[emitters.pick(s.get(dim))] as usize];
@@ -377,15 +380,10 @@ pub(crate) fn sample_pixel(
                                 let le = surface.emitted(e, 1.0 - su, u2 * su);
                                 let light_pdf = d2 / (cos_there * emitters.total_area);
                                 let r = bsdf_pdf / light_pdf;
-                                // The last bounce samples no direction: light samples count whole.
-                                let weight = if last { 1.0 } else { 1.0 / (1.0 + r * r) };
-                                radiance += throughput * f * le * (weight / light_pdf);
+                                radiance += throughput * f * le * (1.0 / (1.0 + r * r) / light_pdf);
                             }
                         }
                     }
-                }
-                if last {
-                    break;
                 }
                 let (u1, u2) = (s.get(dim + 4), s.get(dim + 5));
                 let bs = if lambert {
@@ -425,7 +423,11 @@ pub(crate) fn sample_pixel(
                     origin
                 };
                 ray = Ray::new(from, bs.wi);
-                last_pdf = if bs.delta || bs.transmitted { 0.0 } else { bs.pdf };
+                last_pdf = if bs.delta || bs.transmitted {
+                    0.0
+                } else {
+                    bs.pdf
+                };
                 rays += 1;
                 hit = trace_masked(tracer, surface, &ray, f32::INFINITY, false);
                 bounce += 1;
