@@ -1,5 +1,5 @@
 /* integrator.cl: the progressive shade modes (ambient occlusion, a light with hard
- * shadows, diffuse path tracing), one sample per pixel per launch, added to a pitched
+ * shadows, path tracing through cl/bsdf.cl's models), one sample per pixel per launch, added to a pitched
  * long4 accumulation image (fixed-point radiance sums, and the sample count in w) over a
  * region of the image. Mirrored by
  * src/render/integrator.rs, whence SHADOW_AMBIENT and ROULETTE_AFTER come. Compiled, like

@@ -351,6 +351,11 @@ fn materials_factors_textures_and_attributes_are_read() {
     let a = &m.list[1];
     assert_eq!(a.albedo, [0.5, 0.25, 1.0]);
     assert_eq!((a.metallic, a.roughness), (0.75, 0.125));
+    assert_eq!(
+        (cltrace::material::Bsdf::from_code(a.bsdf), a.ior),
+        (cltrace::material::Bsdf::Plastic, 1.5),
+        "glTF's dielectric base: a coating of index 1.5, blended with a metal"
+    );
     assert_eq!(a.emission, [4.0, 2.0, 0.0]);
     assert_eq!(a.normal_scale, 0.5);
     assert_eq!(a.alpha_texture, a.base_texture);

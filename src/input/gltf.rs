@@ -723,9 +723,12 @@ impl Reader<'_> {
                 0.0
             };
             let emission = m.emissive_factor.0.map(|e| unit(e) * strength);
+            // glTF's metallic-roughness model: a dielectric of index 1.5 over the base
+            // colour (cltrace's plastic) blended with a metal of the base colour.
             let mut material = Material {
                 metallic: unit(pbr.metallic_factor.0),
                 roughness: unit(pbr.roughness_factor.0),
+                bsdf: crate::material::Bsdf::Plastic.code(),
                 ..Material::emitting([r, g, b], emission)
             };
             let infos = [

@@ -1,5 +1,6 @@
 //! The progressive shade modes on the host: ambient occlusion, a light with hard shadows,
-//! and a diffuse path tracer with next-event estimation. Each sample of each pixel is a
+//! and a path tracer through the scattering models of [`super::bsdf`], light samples and
+//! BSDF samples weighed by multiple importance sampling. Each sample of each pixel is a
 //! pure function of (seed, pixel, sample), mirrored by the kernels of cl/integrator.cl, so the
 //! host is the reference the devices are compared with.
 
@@ -97,10 +98,11 @@ pub enum Lighting {
         /// The one light.
         light: Light,
     },
-    /// Diffuse path tracing: next-event estimation to emitting triangles where there are
+    /// Path tracing: next-event estimation to emitting triangles where there are
     /// any, a sky otherwise, Russian roulette after a few bounces.
     Path {
-        /// Diffuse bounces after the first hit, at most; 0 lights the first hit only.
+        /// Bounces after the first hit, at most; 0 lights the first hit only (by a light
+        /// sample, and by a sampled direction traced for the emitter it hits).
         max_bounces: u32,
     },
 }

@@ -80,7 +80,8 @@ pub enum Shade {
     Ao,
     /// The albedo under one light (`--light`) with hard shadows.
     Shadow,
-    /// Diffuse path tracing: light from emitting materials, or a sky where there are none.
+    /// Path tracing through the materials' scattering models: light from emitting
+    /// materials, or a sky where there are none.
     Path,
 }
 
@@ -146,7 +147,7 @@ impl Shade {
             }
             Shade::Shadow => "The albedo under one light (`--light`) with hard shadows",
             Shade::Path => {
-                "Diffuse path tracing: light from emitting materials, or a sky where there are none"
+                "Path tracing through metals, glass and plastics: light from emitting materials, or a sky where there are none"
             }
         }
     }
