@@ -171,16 +171,24 @@ __kernel void sample_path(SAMPLE_PARAMS) {
         /* The last bounce's direction was traced only for the emitter it might hit. */
         if (bounce > max_bounces) break;
         Shading sh = shading_at(&materials[tri->material], &sp);
-        /* Lambert alone takes the short way: no local frame. */
+        /* Lambert alone takes the short way, without a local frame. Programs of scenes whose
+         * every material is Lambertian leave the other models out (BSDFS undefined): they
+         * cost registers, and so speed, even where no ray reaches them. */
+#ifdef BSDFS
         bool lambert = sh.bsdf == BSDF_DIFFUSE && sh.metallic <= 0.0f;
+#else
+        const bool lambert = true;
+#endif
         float3 origin = sp.origin;
         float3 n = sp.ns;
-        float3 tn, bn;
-        basis(n, &tn, &bn);
-        float3 wo = -normalize(dir);
-        float3 wo_l = (float3)(dot(wo, tn), dot(wo, bn), dot(wo, n));
+        float3 tn = (float3)(0.0f), bn = (float3)(0.0f), wo_l = (float3)(0.0f);
+        if (!lambert) {
+            basis(n, &tn, &bn);
+            float3 wo = -normalize(dir);
+            wo_l = (float3)(dot(wo, tn), dot(wo, bn), dot(wo, n));
+        }
         uint d = bounce_dim(bounce);
-        if (emitter_count > 0 && !shading_all_delta(&sh)) {
+        if (emitter_count > 0 && (lambert || !shading_all_delta(&sh))) {
             const __global Triangle* e = &tris[emitters[pick_emitter(emitter_cdf, emitter_count, sample_1d(key, d))]];
             float u1 = sample_1d(key, d + 1), u2 = sample_1d(key, d + 2);
             float3 q = triangle_point(load3(e->v0), load3(e->v1), load3(e->v2), u1, u2);
@@ -232,7 +240,7 @@ __kernel void sample_path(SAMPLE_PARAMS) {
          * refracted one above it would not. */
         float side = dot3(bs.wi, sp.ng);
         if (bs.transmitted ? side >= 0.0f : side <= 0.0f) break;
-        org = bs.transmitted ? origin - sp.ng * (2.0f * offset) : origin;
+        org = bs.transmitted ? sp.through : origin;
         dir = bs.wi;
         last_pdf = bs.delta || bs.transmitted ? 0.0f : bs.pdf;
         count += 1;

@@ -68,6 +68,7 @@ FORCE_INLINE float3 shading_normal(SURFACE_PARAMS, const __global Triangle* tri,
 /* What the integrator needs of a hit. */
 typedef struct {
     float3 origin;   /* where rays leave from: off the surface on the ray's side */
+    float3 through;  /* where refracted rays leave from: off the plain hit point, far side */
     float3 ng;       /* unit geometric normal, on the ray's side */
     float3 ns;       /* unit shading normal, on the ray's side */
     float3 normal;   /* unit shading normal as the mesh orients it (the normal shade mode) */
@@ -112,7 +113,9 @@ FORCE_INLINE SurfacePoint surface_point(SURFACE_PARAMS, const __global Triangle*
         /* Flat and untextured: the plain hit point, as before shading data existed. */
         s.ns = s.ng;
         s.normal = front;
-        s.origin = org + dir * t + s.ng * offset;
+        float3 hit = org + dir * t;
+        s.origin = hit + s.ng * offset;
+        s.through = hit - s.ng * offset;
         return s;
     }
     WatertightRay r = watertight_ray(org, dir);
@@ -179,6 +182,8 @@ FORCE_INLINE SurfacePoint surface_point(SURFACE_PARAMS, const __global Triangle*
     s.normal = n;
     s.ns = dot3(n, s.ng) < 0.0f ? -n : n;
     float3 p = LERP3(v0, v1, v2, w);
+    /* Refracted rays leave from the plain point: lifted, they would meet this triangle again. */
+    s.through = p - s.ng * offset;
     if (smooth) {
         /* Hanika 2021, "Hacking the shadow terminator": the point lifted onto the curved
          * surface the vertex normals describe (each corner's tangent plane, blended), so

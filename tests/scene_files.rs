@@ -190,6 +190,39 @@ fn the_one_mesh_form_loads_exactly_as_the_mesh_file_does() {
     assert_eq!(scene.meshes.load().unwrap(), room.mesh);
 }
 
+/// The materials example holds every model it says it does, and renders.
+#[test]
+fn the_materials_example_scene_holds_glass_metals_and_plastic() {
+    use cltrace::material::Bsdf;
+    let scene = SceneDescription::named(Some(&scenes().join("materials.toml"))).unwrap();
+    let loaded = scene.meshes.load_with_materials().unwrap();
+    let models: Vec<Bsdf> = loaded
+        .file
+        .materials
+        .list
+        .iter()
+        .map(|m| Bsdf::from_code(m.bsdf))
+        .collect();
+    for b in [
+        Bsdf::Dielectric,
+        Bsdf::Conductor,
+        Bsdf::Plastic,
+        Bsdf::Diffuse,
+    ] {
+        assert!(models.contains(&b), "{b:?} missing from {models:?}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mut cmd = cltrace();
+    cmd.arg("render")
+        .arg(scenes().join("materials.toml"))
+        .args([
+            "--width", "32", "--height", "24", "--method", "cpu-bvh", "--spp", "2", "-q",
+        ])
+        .arg("-o")
+        .arg(dir.path().join("materials.png"));
+    succeeded(&run(cmd));
+}
+
 #[test]
 fn the_example_scene_renders_and_animates() {
     let dir = tempfile::tempdir().unwrap();

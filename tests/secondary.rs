@@ -650,6 +650,43 @@ fn mirrors_showed_no_light_at_the_last_bounce() {
     });
 }
 
+/// A smooth glass ball rendered black: refracted rays left from the hit point lifted onto
+/// the curved surface the vertex normals describe (the shadow-terminator fix), in front of
+/// the facet, and met their own triangle again. They now leave from the plain point.
+#[test]
+fn smooth_glass_was_black_where_its_refracted_rays_met_their_own_triangle() {
+    use cltrace::material::Bsdf;
+    on_every_device(|device| {
+        // No vertex normals: the default crease angle computes smooth ones.
+        let sphere = generate(Generator::Sphere { subdivisions: 3 });
+        let glass = Materials::uniform(Material::with_bsdf(Bsdf::Dielectric, [1.0; 3], 0.0));
+        let cam = camera(&sphere, [0.0, 0.0, 3.0], [0.0, 0.0, 0.0], 30.0, (16, 16));
+        for (method, device) in [(Method::CpuBvh, None), (Method::ClBvh, Some(device))] {
+            let img = accumulate(
+                method,
+                device,
+                (&sphere, &glass),
+                &cam,
+                Lighting::Path { max_bounces: 8 },
+                16,
+                2,
+            )
+            .radiance();
+            // The middle 8 x 8 pixels see the sky through the ball: at least its grey
+            // below (0.35), near the horizon white.
+            let middle: f32 = (4..12)
+                .flat_map(|y| (4..12).map(move |x| y * 16 + x))
+                .map(|i| img[i][0])
+                .sum::<f32>()
+                / 64.0;
+            assert!(
+                middle > 0.5,
+                "{method:?}: the glass ball is dark ({middle})"
+            );
+        }
+    });
+}
+
 /// `--two-sided-lights` and `[render] two_sided_lights` reach the renderer, the flag over
 /// the scene file: a panel facing away from the floor lights it only when two-sided.
 #[test]

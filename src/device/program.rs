@@ -310,7 +310,7 @@ impl ClDevice {
     }
 
     /// [`ClDevice::compile_program`] for a scene whose surface has `features` (cut-out
-    /// masks, vertex normals).
+    /// masks, vertex normals, scattering models).
     pub fn compile_program_for(
         &self,
         bvh: Option<(Layout, u32)>,
@@ -328,6 +328,9 @@ impl ClDevice {
         }
         if features.normals {
             defines.push("SHADING_NORMALS".into());
+        }
+        if features.bsdfs {
+            defines.push("BSDFS".into());
         }
         let kernels = if sampling {
             "trace.cl + integrator.cl"

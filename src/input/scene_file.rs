@@ -62,7 +62,12 @@
 //! rotate = [0.0, 30.0, 0.0]    # degrees about x, then y, then z, each right-handed
 //! translate = [1.0, 0.0, 0.0]  # applied last: scale, rotate, translate
 //! material = { albedo = [0.8, 0.2, 0.2], emission = [0.0, 0.0, 0.0] }
-//!                              # optional: every triangle of this mesh, instead of its own
+//!                              # optional: every triangle of this mesh, instead of its own;
+//!                              # also bsdf = "diffuse", "conductor", "dielectric",
+//!                              # "thin-dielectric" or "plastic", roughness, metallic (0-1),
+//!                              # ior, specular = [r, g, b], and for conductors
+//!                              # metal = "gold" (silver, copper, aluminium, iron,
+//!                              # chromium) or eta = [r, g, b], k = [r, g, b]
 //!
 //! [ground]                     # optional, with any form: a square facing up (+y)
 //! albedo = [0.5, 0.5, 0.5]     # the default
@@ -73,7 +78,8 @@
 //! Triangles (the hit records' primitive indices) come mesh by mesh in file order, then
 //! the ground's two. The auto framing, the depth shading and the default `ao_distance`
 //! measure the meshes without the ground. A mirroring scale reverses each triangle's
-//! winding, so front faces stay front faces. Example: `scenes/several.toml`.
+//! winding, so front faces stay front faces. Examples: `scenes/several.toml`,
+//! `scenes/materials.toml`.
 
 use std::path::{Path, PathBuf};
 

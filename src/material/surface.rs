@@ -25,6 +25,10 @@ pub struct SurfaceFeatures {
     /// Vertex normals: primary rays shade with the interpolated normal (`SHADING_NORMALS`,
     /// cl/surface.cl).
     pub normals: bool,
+    /// Materials other than Lambertian: the path tracer holds the scattering models of
+    /// cl/bsdf.cl (`BSDFS`, cl/integrator.cl). Without them it is 23% faster per ray on the
+    /// H200 (docs/bench/2026-12-03-bsdfs.md).
+    pub bsdfs: bool,
 }
 /// [`Surface::flags`] bit: the vertices have texture coordinates.
 pub const SURFACE_UVS: u32 = 2;
@@ -61,6 +65,10 @@ pub struct Surface {
 pub struct SurfacePoint {
     /// Where rays leave from: off the surface on the ray's side.
     pub origin: Vec3,
+    /// Where rays that pass through the surface (refraction) leave from: off the plain
+    /// hit point on the far side, not lifted onto the curved surface as `origin` may be
+    /// (whence a refracted ray would meet its own triangle again).
+    pub through: Vec3,
     /// The unit geometric normal on the ray's side.
     pub ng: Vec3,
     /// The unit shading normal on the ray's side.
@@ -137,6 +145,10 @@ impl Surface {
         SurfaceFeatures {
             masks: self.has_masks(),
             normals: self.flags & SURFACE_NORMALS != 0,
+            bsdfs: self
+                .materials
+                .iter()
+                .any(|m| m.bsdf != crate::material::Bsdf::Diffuse.code() || m.metallic > 0.0),
         }
     }
 
@@ -222,8 +234,10 @@ impl Surface {
         };
         let (mut roughness, mut metallic) = (m.roughness, m.metallic);
         if self.flags == 0 {
+            let p = org + dir * t;
             return SurfacePoint {
-                origin: org + dir * t + ng * offset,
+                origin: p + ng * offset,
+                through: p - ng * offset,
                 ng,
                 ns: ng,
                 normal: front,
@@ -300,6 +314,7 @@ impl Surface {
         }
         let ns = if dot3(n, ng) < 0.0 { -n } else { n };
         let mut p = lerp3(v0, v1, v2, w);
+        let through = p - ng * offset;
         if smooth {
             // Hanika 2021, "Hacking the shadow terminator": see cl/surface.cl.
             let flip = if back { -1.0 } else { 1.0 };
@@ -311,6 +326,7 @@ impl Surface {
         }
         SurfacePoint {
             origin: p + ng * offset,
+            through,
             ng,
             ns,
             normal: n,

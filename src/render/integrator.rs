@@ -419,11 +419,7 @@ pub(crate) fn sample_pixel(
                 if (bs.transmitted && cos >= 0.0) || (!bs.transmitted && cos <= 0.0) {
                     break;
                 }
-                let from = if bs.transmitted {
-                    origin - ng * (2.0 * settings.offset)
-                } else {
-                    origin
-                };
+                let from = if bs.transmitted { sp.through } else { origin };
                 ray = Ray::new(from, bs.wi);
                 last_pdf = if bs.delta || bs.transmitted {
                     0.0
