@@ -161,6 +161,7 @@ __kernel void sample_path(SAMPLE_PARAMS) {
         const __global Triangle* tri = &tris[hit];
         cone = bounce == 0 ? camera_cone(du, t) : cone + BOUNCE_CONE_SPREAD * t;
         SurfacePoint sp = surface_point(SURFACE, tri, org, dir, t, offset, cone);
+#ifdef BSDFS
         if (last_pdf > 0.0f && max3(sp.emission) > 0.0f) {
             /* dir is a unit vector after the camera ray, so t is the distance. */
             float r = t * t / (fabs(dot3(sp.ng, dir)) * emitter_area) / last_pdf;
@@ -170,6 +171,12 @@ __kernel void sample_path(SAMPLE_PARAMS) {
         }
         /* The last bounce's direction was traced only for the emitter it might hit. */
         if (bounce > max_bounces) break;
+#else
+        /* Lambertian scenes: after the camera ray, emitters are reached by light samples
+         * alone (no MIS), which for diffuse bounces off small lights loses nothing and
+         * saves the weights and the last bounce's ray. */
+        if (bounce == 0) radiance += throughput * sp.emission;
+#endif
         Shading sh = shading_at(&materials[tri->material], &sp);
         /* Lambert alone takes the short way, without a local frame. Programs of scenes whose
          * every material is Lambertian leave the other models out (BSDFS undefined): they
@@ -212,12 +219,20 @@ __kernel void sample_path(SAMPLE_PARAMS) {
                         float su = sqrt(u1);
                         float light_pdf = d2 / (cos_there * emitter_area);
                         /* The last bounce samples no direction: light samples count whole. */
+#ifdef BSDFS
                         float r = bsdf_pdf / light_pdf;
-                        radiance += throughput * f * emitted(SURFACE, e, 1.0f - su, u2 * su) * (1.0f / (1.0f + r * r) / light_pdf);
+                        float weight = 1.0f / (1.0f + r * r);
+#else
+                        float weight = 1.0f;
+#endif
+                        radiance += throughput * f * emitted(SURFACE, e, 1.0f - su, u2 * su) * (weight / light_pdf);
                     }
                 }
             }
         }
+#ifndef BSDFS
+        if (bounce == max_bounces) break;
+#endif
         float u1 = sample_1d(key, d + 4), u2 = sample_1d(key, d + 5);
         BsdfSample bs;
         if (lambert) {

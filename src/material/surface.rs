@@ -26,8 +26,9 @@ pub struct SurfaceFeatures {
     /// cl/surface.cl).
     pub normals: bool,
     /// Materials other than Lambertian: the path tracer holds the scattering models of
-    /// cl/bsdf.cl (`BSDFS`, cl/integrator.cl). Without them it is 23% faster per ray on the
-    /// H200 (docs/bench/2026-12-03-bsdfs.md).
+    /// cl/bsdf.cl and weighs light and BSDF samples (`BSDFS`, cl/integrator.cl). Without
+    /// them it reaches emitters by light samples alone and keeps the diffuse path
+    /// tracer's speed (the models cost the H200 23% a ray: docs/bench/2026-12-03-bsdfs.md).
     pub bsdfs: bool,
 }
 /// [`Surface::flags`] bit: the vertices have texture coordinates.

@@ -249,11 +249,16 @@ fn camera_cone(camera: &Pinhole, t: f32) -> f32 {
     t * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
 }
 
-/// One sample of pixel (x, y): its radiance and the number of rays traced for it.
+/// One sample of pixel (x, y): its radiance and the number of rays traced for it. `mis`:
+/// light and BSDF samples weighed against each other, as for scenes with other models
+/// than Lambert (`BSDFS` in cl/integrator.cl); else emitters are found by light samples
+/// alone after the camera ray.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn sample_pixel(
     tracer: &(impl ClosestHit + ?Sized),
     surface: &Surface,
     emitters: &Emitters,
+    mis: bool,
     camera: &Pinhole,
     settings: &SampleSettings,
     (x, y, width): (u32, u32, u32),
@@ -333,7 +338,12 @@ pub(crate) fn sample_pixel(
                     _ => cone + BOUNCE_CONE_SPREAD * t,
                 };
                 let sp = hit_point(i, &ray, t, cone);
-                if last_pdf > 0.0 && sp.emission.max_element() > 0.0 {
+                if !mis {
+                    // Emitters are reached by light samples alone after the camera ray.
+                    if bounce == 0 {
+                        radiance += throughput * sp.emission;
+                    }
+                } else if last_pdf > 0.0 && sp.emission.max_element() > 0.0 {
                     let ng = sp.ng;
                     let cos = (ng.x * ray.dir.x + ng.y * ray.dir.y + ng.z * ray.dir.z).abs();
                     let r = t * t / (cos * emitters.total_area) / last_pdf;
@@ -346,7 +356,7 @@ pub(crate) fn sample_pixel(
                     break;
                 }
                 let sh = Shading::at(&surface.material(&tris[i]), &sp);
-                let lambert = sh.bsdf == BSDF_DIFFUSE && sh.metallic <= 0.0;
+                let lambert = !mis || (sh.bsdf == BSDF_DIFFUSE && sh.metallic <= 0.0);
                 let (origin, n, ng) = (sp.origin, sp.ns, sp.ng);
                 let (tn, bn) = basis(n);
                 let wo = -ray.dir.normalize();
@@ -382,10 +392,14 @@ pub(crate) fn sample_pixel(
                                 let le = surface.emitted(e, 1.0 - su, u2 * su);
                                 let light_pdf = d2 / (cos_there * emitters.total_area);
                                 let r = bsdf_pdf / light_pdf;
-                                radiance += throughput * f * le * (1.0 / (1.0 + r * r) / light_pdf);
+                                let weight = if mis { 1.0 / (1.0 + r * r) } else { 1.0 };
+                                radiance += throughput * f * le * (weight / light_pdf);
                             }
                         }
                     }
+                }
+                if !mis && bounce == max_bounces {
+                    break;
                 }
                 let (u1, u2) = (s.get(dim + 4), s.get(dim + 5));
                 let bs = if lambert {
@@ -632,6 +646,7 @@ pub(crate) fn render_samples(
 ) {
     let region = accumulation.region;
     let width = accumulation.width;
+    let mis = surface.features().bsdfs;
     let rays: u64 = accumulation
         .pixels
         .par_chunks_mut(region.width().max(1) as usize)
@@ -649,6 +664,7 @@ pub(crate) fn render_samples(
                         tracer,
                         surface,
                         emitters,
+                        mis,
                         camera,
                         settings,
                         (x, y, width),
