@@ -18,7 +18,8 @@ FORCE_INLINE float3 emitting_normal(const __global Triangle* tri, float3 dir) {
     return (tri->flags & TRIANGLE_TWO_SIDED) != 0u && dot(n, dir) > 0.0f ? -n : n;
 }
 
-/* The sky of scenes without emitters: white at the horizon, blue overhead, grey below. */
+/* The sky of scenes without emitters or other lights: white at the horizon, blue
+ * overhead, grey below. */
 FORCE_INLINE float3 sky(float3 d) {
     float up = d.y / length(d);
     return up >= 0.0f ? mix((float3)(1.0f), (float3)(0.45f, 0.65f, 1.0f), up)
@@ -26,9 +27,12 @@ FORCE_INLINE float3 sky(float3 d) {
 }
 
 /* What the shade modes read besides the scene and its surfaces: the emitting triangles
- * (indices into tris) with the cumulative distribution of their areas. */
+ * (indices into tris) with the cumulative distribution of their power and its total; the
+ * environment (environment.cl) and the punctual lights (punctual.cl), read only by programs
+ * compiled for them (ENVIRONMENT, PUNCTUAL) and one dummy element otherwise. */
 #define LIGHT_PARAMS __global const uint* emitters, \
-    __global const float* emitter_cdf, uint emitter_count, float emitter_area
+    __global const float* emitter_cdf, uint emitter_count, float emitter_power, \
+    ENV_PARAMS, PUNCTUAL_PARAMS
 
 /* Every sample kernel takes the same arguments; each mode reads the ones it needs. The
  * launch covers columns [col0, col_end) and rows [global offset, row_end); the
@@ -139,6 +143,26 @@ FORCE_INLINE float3 emitted(SURFACE_PARAMS, const __global Triangle* e, float w0
     return le;
 }
 
+/* The density per area with which light samples pick a point of emitter tri: its
+ * material's mean emission (its power per area) over all emitters' power. */
+FORCE_INLINE float emitter_density(__global const Material* materials,
+                                   const __global Triangle* tri, float emitter_power) {
+    float3 le = load3(materials[tri->material].emission);
+    return (le.x + le.y + le.z) * (1.0f / 3.0f) / emitter_power;
+}
+
+/* What the shading point scatters towards the eye of light arriving from unit direction
+ * l, per unit of irradiance, and in *pdf the density with which BSDF sampling picks l. */
+FORCE_INLINE float3 scatter_from(const Shading* sh, bool lambert, float3 n, float3 tn,
+                                 float3 bn, float3 wo_l, float3 l, float* pdf) {
+    if (lambert) {
+        float cos_here = fmax(dot(n, l), 0.0f);
+        *pdf = cos_here / M_PI_F;
+        return sh->albedo * (cos_here / M_PI_F);
+    }
+    return bsdf_eval(sh, wo_l, (float3)(dot(l, tn), dot(l, bn), dot(l, n)), pdf);
+}
+
 __kernel void sample_path(SAMPLE_PARAMS) {
     SAMPLE_PIXEL
     float3 org;
@@ -155,16 +179,28 @@ __kernel void sample_path(SAMPLE_PARAMS) {
     float last_pdf = 0.0f;
     for (uint bounce = 0;; ++bounce) {
         if (hit == MISS) {
+#if defined(ENVIRONMENT)
+            float env_pdf;
+            float3 le = env_radiance(ENV, normalize(dir), &env_pdf);
+            /* Weighed against the environment's light samples, which could have found it. */
+            if (last_pdf > 0.0f) {
+                float r = env_pdf / last_pdf;
+                le *= 1.0f / (1.0f + r * r);
+            }
+            radiance += throughput * le;
+#elif !defined(PUNCTUAL)
             if (emitter_count == 0) radiance += throughput * sky(dir);
+#endif
             break;
         }
         const __global Triangle* tri = &tris[hit];
         cone = bounce == 0 ? camera_cone(du, t) : cone + BOUNCE_CONE_SPREAD * t;
         SurfacePoint sp = surface_point(SURFACE, tri, org, dir, t, offset, cone);
-#ifdef BSDFS
+#ifdef MIS
         if (last_pdf > 0.0f && max3(sp.emission) > 0.0f) {
             /* dir is a unit vector after the camera ray, so t is the distance. */
-            float r = t * t / (fabs(dot3(sp.ng, dir)) * emitter_area) / last_pdf;
+            float r = t * t * emitter_density(materials, tri, emitter_power)
+                    / fabs(dot3(sp.ng, dir)) / last_pdf;
             radiance += throughput * sp.emission * (1.0f / (1.0f + r * r));
         } else if (last_pdf == 0.0f) {
             radiance += throughput * sp.emission;
@@ -195,7 +231,8 @@ __kernel void sample_path(SAMPLE_PARAMS) {
             wo_l = (float3)(dot(wo, tn), dot(wo, bn), dot(wo, n));
         }
         uint d = bounce_dim(bounce);
-        if (emitter_count > 0 && (lambert || !shading_all_delta(&sh))) {
+        bool lit = lambert || !shading_all_delta(&sh);
+        if (emitter_count > 0 && lit) {
             const __global Triangle* e = &tris[emitters[pick_emitter(emitter_cdf, emitter_count, sample_1d(key, d))]];
             float u1 = sample_1d(key, d + 1), u2 = sample_1d(key, d + 2);
             float3 q = triangle_point(load3(e->v0), load3(e->v1), load3(e->v2), u1, u2);
@@ -205,21 +242,13 @@ __kernel void sample_path(SAMPLE_PARAMS) {
             float cos_there = dot(emitting_normal(e, l), -l);
             if (cos_there > 0.0f && dot3(l, sp.ng) > 0.0f) {
                 float bsdf_pdf;
-                float3 f;
-                if (lambert) {
-                    float cos_here = fmax(dot(n, l), 0.0f);
-                    f = sh.albedo * (cos_here / M_PI_F);
-                    bsdf_pdf = cos_here / M_PI_F;
-                } else {
-                    f = bsdf_eval(&sh, wo_l, (float3)(dot(l, tn), dot(l, bn), dot(l, n)), &bsdf_pdf);
-                }
+                float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
                 if (max3(f) > 0.0f) {
                     count += 1;
                     if (!occluded(SCENE, origin, l, sqrt(d2) * (1.0f - 1e-4f))) {
                         float su = sqrt(u1);
-                        float light_pdf = d2 / (cos_there * emitter_area);
-                        /* The last bounce samples no direction: light samples count whole. */
-#ifdef BSDFS
+                        float light_pdf = d2 * emitter_density(materials, e, emitter_power) / cos_there;
+#ifdef MIS
                         float r = bsdf_pdf / light_pdf;
                         float weight = 1.0f / (1.0f + r * r);
 #else
@@ -230,7 +259,41 @@ __kernel void sample_path(SAMPLE_PARAMS) {
                 }
             }
         }
-#ifndef BSDFS
+#ifdef ENVIRONMENT
+        if (lit) {
+            float3 l;
+            float env_pdf;
+            float3 le = env_sample(ENV, sample_1d(key, d + 8), sample_1d(key, d + 9), &l, &env_pdf);
+            if (env_pdf > 0.0f && dot3(l, sp.ng) > 0.0f) {
+                float bsdf_pdf;
+                float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
+                if (max3(f) > 0.0f) {
+                    count += 1;
+                    if (!occluded(SCENE, origin, l, INFINITY)) {
+                        float r = bsdf_pdf / env_pdf;
+                        radiance += throughput * f * le * (1.0f / (1.0f + r * r) / env_pdf);
+                    }
+                }
+            }
+        }
+#endif
+#ifdef PUNCTUAL
+        /* Every punctual light, each by one shadow ray: nothing else can find them. */
+        for (uint k = 0; lit && k < punctual_count; ++k) {
+            float3 l;
+            float reach;
+            float3 e = punctual_incident(punctual, k, origin, &l, &reach);
+            if (max3(e) > 0.0f && dot3(l, sp.ng) > 0.0f) {
+                float bsdf_pdf;
+                float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
+                if (max3(f) > 0.0f) {
+                    count += 1;
+                    if (!occluded(SCENE, origin, l, reach * (1.0f - 1e-4f))) radiance += throughput * f * e;
+                }
+            }
+        }
+#endif
+#ifndef MIS
         if (bounce == max_bounces) break;
 #endif
         float u1 = sample_1d(key, d + 4), u2 = sample_1d(key, d + 5);

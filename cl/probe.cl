@@ -109,6 +109,9 @@ __kernel void probe_constants(__global uint* out) {
     out[i++] = BSDF_DIELECTRIC;
     out[i++] = BSDF_THIN_DIELECTRIC;
     out[i++] = BSDF_PLASTIC;
+    out[i++] = LIGHT_DIRECTIONAL;
+    out[i++] = LIGHT_POINT;
+    out[i++] = LIGHT_SPOT;
 }
 
 /* The camera rays of every pixel of a width x height image, for tests/camera.rs: the camera

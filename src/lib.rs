@@ -11,7 +11,8 @@
 //!   and the robust slab test (mirrored in `cl/intersect.cl`), and
 //!   [`intersect::ClosestHit`], what every host tracer answers; the camera of each frame of
 //!   a scene's keyframes or turntable.
-//! - [`material`], [`brute`], [`bvh`]: materials per triangle; brute force on the host;
+//! - [`material`], [`light`]: materials per triangle; the lights besides emitters.
+//! - [`brute`], [`bvh`]: brute force on the host;
 //!   the SAH builders and the device layouts (`bin32`, `bin64`, `wide4`, `wide8`, `cwbvh`),
 //!   each with its host traversal or box test.
 //! - [`render`], [`report`]: host shading, sampling and the path tracer's reference;
@@ -40,6 +41,7 @@ pub mod intersect;
 
 pub mod brute;
 pub mod bvh;
+pub mod light;
 pub mod material;
 
 pub mod render;

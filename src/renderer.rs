@@ -5,6 +5,7 @@
 
 pub mod schedule;
 
+use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use rayon::prelude::*;
@@ -16,8 +17,9 @@ use crate::device::{ClDevice, ClTracer, default_layout};
 use crate::error::Result;
 use crate::geometry::Ray;
 use crate::intersect::{ClosestHit, Triangle, triangles_in_order};
+use crate::light::Lights;
 use crate::material::Materials;
-use crate::material::surface::Surface;
+use crate::material::surface::{Surface, SurfaceFeatures};
 use crate::mesh::{DEFAULT_CREASE_ANGLE, Mesh};
 use crate::render::integrator::{self, Accumulation, Emitters, SampleSettings};
 use crate::render::{Frame, Hit, Method, ShadeParams, cpu};
@@ -30,6 +32,8 @@ pub struct Renderer<'d> {
     surface: Surface,
     /// The emitting triangles, as indices into the tracer's triangle order.
     emitters: Emitters,
+    /// The other lights.
+    lights: Arc<Lights>,
     /// The BVH's statistics, for the BVH methods.
     pub(crate) bvh: Option<BvhStats>,
     /// Bytes of scene data the tracer reads (triangles, and nodes for a BVH).
@@ -43,7 +47,7 @@ enum Tracer<'d> {
 }
 
 /// How [`Renderer::prepare`] readies a method.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct PrepareOptions {
     /// How the BVH methods build their tree.
     pub build: BuildOptions,
@@ -61,6 +65,9 @@ pub struct PrepareOptions {
     pub crease_angle: Option<f32>,
     /// Emitters shine from both faces, not only from the front one (their winding's side).
     pub two_sided_lights: bool,
+    /// The lights besides emitting triangles (shared, not copied, between the renderers
+    /// of several devices).
+    pub lights: Arc<Lights>,
 }
 
 /// What tracing cost.
@@ -165,7 +172,11 @@ impl<'d> Renderer<'d> {
             };
             Surface::new(mesh, materials)
         });
-        let features = surface.features();
+        let features = SurfaceFeatures {
+            environment: options.lights.environment.is_some(),
+            punctual: !options.lights.punctual.is_empty(),
+            ..surface.features()
+        };
         let (flat, mut bvh) = match built {
             Some((flat, stats)) => (Some(flat), Some(stats)),
             None => (None, None),
@@ -208,7 +219,7 @@ impl<'d> Renderer<'d> {
                 let tracer = timings.time("upload", || -> Result<ClTracer> {
                     let mut t = ClTracer::brute(device, &program, &triangles)?;
                     t.set_surface(&surface)?;
-                    t.set_lights(&emitters)?;
+                    t.set_lights(&emitters, &options.lights)?;
                     Ok(t)
                 })?;
                 (
@@ -234,7 +245,7 @@ impl<'d> Renderer<'d> {
                 let tracer = timings.time("upload", || -> Result<ClTracer> {
                     let mut t = ClTracer::with_layout(device, &program, &laid)?;
                     t.set_surface(&surface)?;
-                    t.set_lights(&emitters)?;
+                    t.set_lights(&emitters, &options.lights)?;
                     if let Some(shape) = options.work_group {
                         // A cache that no longer fits the device is ignored, not fatal.
                         let _ = t.set_work_group(shape);
@@ -253,6 +264,7 @@ impl<'d> Renderer<'d> {
             tracer,
             surface,
             emitters,
+            lights: options.lights.clone(),
             bvh,
             scene_bytes,
         })
@@ -347,6 +359,7 @@ impl<'d> Renderer<'d> {
                         host,
                         &self.surface,
                         &self.emitters,
+                        &self.lights,
                         &pinhole,
                         settings,
                         s..s + 1,

@@ -529,6 +529,7 @@ fn shadow_samples(
         sampling: true,
         crease_angle: None,
         two_sided_lights: false,
+        lights: Default::default(),
     };
     let mut renderer = Renderer::prepare(
         method,

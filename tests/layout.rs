@@ -17,6 +17,7 @@ use cltrace::device::{ClDevice, ClTracer, Kernel, shared_constants};
 use cltrace::input::generate::Generator;
 use cltrace::intersect::{ROBUST_EXIT, Triangle};
 
+use cltrace::light::punctual;
 use cltrace::material::texture::TextureInfo;
 use cltrace::material::{Material, Wrap, surface};
 use cltrace::render::bsdf;
@@ -184,6 +185,9 @@ fn device_constants_match_the_rust_constants() {
         ("BSDF_DIELECTRIC", bsdf::BSDF_DIELECTRIC),
         ("BSDF_THIN_DIELECTRIC", bsdf::BSDF_THIN_DIELECTRIC),
         ("BSDF_PLASTIC", bsdf::BSDF_PLASTIC),
+        ("LIGHT_DIRECTIONAL", punctual::LIGHT_DIRECTIONAL),
+        ("LIGHT_POINT", punctual::LIGHT_POINT),
+        ("LIGHT_SPOT", punctual::LIGHT_SPOT),
     ];
     // The probe reports every constant the host defines for the kernels, none left out.
     let shared: Vec<&str> = shared_constants().iter().map(|c| c.0).collect();

@@ -13,7 +13,7 @@ const LAYERS: &[&[&str]] = &[
     &["error", "geometry", "hash"],
     &["mesh", "camera", "interrupt"],
     &["intersect", "animation"],
-    &["material"],
+    &["material", "light"],
     &["brute", "bvh"],
     &["render", "report"],
     // Files in and out.

@@ -95,7 +95,7 @@ fn every_kernel_runs_clean_under_oclgrind() {
         );
     }
     text += "[ground]\n[camera]\neye = [0.0, 1.0, 4.0]\nlook_at = [0.0, 0.0, 0.0]\n";
-    std::fs::write(&materials, text).unwrap();
+    std::fs::write(&materials, &text).unwrap();
     let args = [
         "render",
         materials.to_str().unwrap(),
@@ -111,6 +111,25 @@ fn every_kernel_runs_clean_under_oclgrind() {
         "--shade",
         "path",
     ];
+    let log = checked(&oclgrind, dir.path(), &args);
+    if !log.trim().is_empty() {
+        found.push(format!("{args:?}:\n{log}"));
+    }
+    // The same under every other light: an environment map (a 4 x 2 Radiance HDR), a
+    // point, a spot and a directional light.
+    let mut hdr = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 4\n".to_vec();
+    for k in 0..8u8 {
+        hdr.extend([100 + 10 * k, 120, 140, 129]);
+    }
+    std::fs::write(dir.path().join("env.hdr"), hdr).unwrap();
+    text += "[environment]\nfile = \"env.hdr\"\nrotate = 30\n\
+             [[light]]\ntype = \"point\"\nposition = [0.0, 2.0, 1.0]\nintensity = 3\n\
+             [[light]]\ntype = \"spot\"\nposition = [1.0, 2.0, 1.0]\ndirection = [0.0, -1.0, 0.0]\n\
+             [[light]]\ntype = \"directional\"\ndirection = [0.3, -1.0, -0.2]\n";
+    let lit = dir.path().join("lit.toml");
+    std::fs::write(&lit, text).unwrap();
+    let mut args = args;
+    args[1] = lit.to_str().unwrap();
     let log = checked(&oclgrind, dir.path(), &args);
     if !log.trim().is_empty() {
         found.push(format!("{args:?}:\n{log}"));

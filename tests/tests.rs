@@ -17,6 +17,7 @@ mod fuzz_regressions;
 mod gltf;
 mod interrupt;
 mod layout;
+mod lights;
 mod limits;
 mod loaders;
 mod mitsuba;

@@ -301,6 +301,7 @@ fn run_into(
                         // cost the wide layouts 12% on the H200: docs/performance.md).
                         crease_angle: Some(0.0),
                         two_sided_lights: false,
+                        lights: Default::default(),
                     };
                     let mut renderer = Renderer::prepare(
                         method,

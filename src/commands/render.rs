@@ -10,6 +10,7 @@ use crate::device::{ClDevice, DeviceSelector};
 use crate::error::Error;
 use crate::error::Result;
 use crate::geometry::Aabb;
+use crate::input::lights::{EnvironmentFlags, LightsDescription};
 use crate::input::scene_file::{RenderSettings, SceneDescription};
 use crate::mesh::Mesh;
 use crate::output::{self, HitsFormat};
@@ -92,6 +93,8 @@ pub struct RenderRequest {
     pub frames: Option<super::frames::Frames>,
     /// The frame of the scene's camera animation a single render takes its camera from.
     pub frame: u32,
+    /// `--environment`, `--environment-intensity`, `--environment-rotate`: over the scene's.
+    pub environment: EnvironmentFlags,
 }
 
 /// What a finished render reports.
@@ -369,6 +372,7 @@ fn render_with(
         }
     }
     crate::camera::check_settings(&camera_settings)?;
+    let lights_described = req.environment.over(scene.lights.clone())?;
     let selectors = DeviceSelector::list_from_flag_or_env(req.device.as_deref())?;
     let part = check_part(req, &camera_settings, shade)?;
 
@@ -429,6 +433,26 @@ fn render_with(
         None => with_file_camera(camera_settings, file_camera, v),
     };
     let camera = Camera::from_settings(&camera_settings, &bounds)?;
+    // The lights besides emitters light the path tracer only.
+    let lights = match shade {
+        Shade::Path => {
+            let described = &lights_described;
+            let lights = match described.environment.is_some() {
+                true => timings.time("environment", || described.load())?,
+                false => described.load()?,
+            };
+            std::sync::Arc::new(lights)
+        }
+        _ => {
+            if lights_described.environment.is_some() || !lights_described.punctual.is_empty() {
+                v.detail(format!(
+                    "note: the scene's environment and lights light `--shade path` only, not {}",
+                    shade.name()
+                ));
+            }
+            Default::default()
+        }
+    };
     v.detail(format!(
         "camera: eye {:?}, look-at {:?}, up {:?}, fov {}, {}x{}{}",
         camera.eye.to_array(),
@@ -469,6 +493,7 @@ fn render_with(
         sampling: sampling.is_some(),
         crease_angle: render.crease_angle,
         two_sided_lights: render.two_sided_lights.unwrap_or(false),
+        lights: lights.clone(),
     };
     let tuned = device.and_then(tuned_for);
     let mut renderers = match devices.len() {
@@ -661,6 +686,7 @@ fn render_with(
                 &sampling,
                 render.crease_angle,
                 render.two_sided_lights.unwrap_or(false),
+                (lights.any()).then_some(&lights_described),
             ),
             accumulation: acc,
             samples,
@@ -769,6 +795,7 @@ fn check_part(
 /// hash of the triangles and materials, so a renamed file still fits), the camera and
 /// image size, and the shading. Device, method and layout are not in it: parts rendered
 /// by different devices merge.
+#[allow(clippy::too_many_arguments)]
 fn part_settings(
     mesh: &Mesh,
     materials: &crate::material::Materials,
@@ -777,6 +804,7 @@ fn part_settings(
     sampling: &Option<(SampleSettings, u32)>,
     crease_angle: Option<f32>,
     two_sided_lights: bool,
+    lights: Option<&LightsDescription>,
 ) -> String {
     let mut bytes: Vec<u8> = Vec::new();
     let floats = mesh
@@ -825,6 +853,9 @@ fn part_settings(
     // Added only when set, so that parts written before the option still merge.
     if two_sided_lights {
         lines.push("two_sided_lights=true".into());
+    }
+    if let Some(lights) = lights {
+        lines.push(format!("lights={}", lights.describe()));
     }
     if let Some((s, _)) = sampling {
         lines.push(format!("lighting={:?}", s.lighting));

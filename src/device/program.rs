@@ -43,6 +43,8 @@ const FILES: &[(&str, &str)] = &[
     ("brute.cl", include_str!("../../cl/brute.cl")),
     ("sampling.cl", include_str!("../../cl/sampling.cl")),
     ("bsdf.cl", include_str!("../../cl/bsdf.cl")),
+    ("environment.cl", include_str!("../../cl/environment.cl")),
+    ("punctual.cl", include_str!("../../cl/punctual.cl")),
     ("shade.cl", include_str!("../../cl/shade.cl")),
     ("trace.cl", include_str!("../../cl/trace.cl")),
     ("integrator.cl", include_str!("../../cl/integrator.cl")),
@@ -134,6 +136,12 @@ pub fn shared_constants() -> Vec<(&'static str, Constant)> {
         ("BSDF_DIELECTRIC", U32(bsdf::BSDF_DIELECTRIC)),
         ("BSDF_THIN_DIELECTRIC", U32(bsdf::BSDF_THIN_DIELECTRIC)),
         ("BSDF_PLASTIC", U32(bsdf::BSDF_PLASTIC)),
+        (
+            "LIGHT_DIRECTIONAL",
+            U32(crate::light::punctual::LIGHT_DIRECTIONAL),
+        ),
+        ("LIGHT_POINT", U32(crate::light::punctual::LIGHT_POINT)),
+        ("LIGHT_SPOT", U32(crate::light::punctual::LIGHT_SPOT)),
     ]
 }
 
@@ -216,7 +224,16 @@ fn program_files(layout: Option<Layout>, sampling: bool) -> Vec<String> {
     }
     files.extend(["shade.cl", "trace.cl"].map(String::from));
     if sampling {
-        files.extend(["sampling.cl", "bsdf.cl", "integrator.cl"].map(String::from));
+        files.extend(
+            [
+                "sampling.cl",
+                "bsdf.cl",
+                "environment.cl",
+                "punctual.cl",
+                "integrator.cl",
+            ]
+            .map(String::from),
+        );
     }
     files
 }
@@ -331,6 +348,15 @@ impl ClDevice {
         }
         if features.bsdfs {
             defines.push("BSDFS".into());
+        }
+        if features.environment {
+            defines.push("ENVIRONMENT".into());
+        }
+        if features.punctual {
+            defines.push("PUNCTUAL".into());
+        }
+        if features.bsdfs || features.environment {
+            defines.push("MIS".into());
         }
         let kernels = if sampling {
             "trace.cl + integrator.cl"

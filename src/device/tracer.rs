@@ -13,6 +13,7 @@ use crate::camera::Pinhole;
 use crate::error::{Error, Result};
 use crate::geometry::Ray;
 use crate::intersect::Triangle;
+use crate::light::Lights;
 use crate::material::Material;
 use crate::material::surface::{Surface, SurfaceFeatures};
 use crate::material::texture::TextureInfo;
@@ -283,12 +284,21 @@ kernel_params! {
 
 kernel_params! {
     /// `LIGHT_PARAMS` (cl/integrator.cl): the emitting triangles, with the cumulative
-    /// distribution of their areas.
+    /// distribution of their power; the environment (cl/environment.cl); the punctual
+    /// lights (cl/punctual.cl).
     struct LightParams<'a> {
         emitters: &'a ocl::Buffer<u32>,
         emitter_cdf: &'a ocl::Buffer<f32>,
         emitter_count: u32,
-        emitter_area: f32,
+        emitter_power: f32,
+        env_texels: &'a ocl::Buffer<Float4>,
+        env_marginal: &'a ocl::Buffer<f32>,
+        env_conditional: &'a ocl::Buffer<f32>,
+        env_width: u32,
+        env_height: u32,
+        env_rotation: Float2,
+        punctual: &'a ocl::Buffer<Float4>,
+        punctual_count: u32,
     }
 }
 
@@ -395,12 +405,39 @@ struct DeviceBvh {
     status: ocl::Buffer<u32>,
 }
 
-/// What the shade modes read besides the scene (`LIGHT_PARAMS` in cl/integrator.cl).
+/// What the shade modes read besides the scene (`LIGHT_PARAMS` in cl/integrator.cl); an
+/// absent light is one zero element, since buffers cannot be empty.
 struct DeviceLights {
     emitters: ocl::Buffer<u32>,
     cdf: ocl::Buffer<f32>,
     count: u32,
-    area: f32,
+    power: f32,
+    env_texels: ocl::Buffer<Float4>,
+    env_marginal: ocl::Buffer<f32>,
+    env_conditional: ocl::Buffer<f32>,
+    env_size: [u32; 2],
+    env_rotation: [f32; 2],
+    punctual: ocl::Buffer<Float4>,
+    punctual_count: u32,
+}
+
+impl DeviceLights {
+    fn params(&self) -> LightParams<'_> {
+        LightParams {
+            emitters: &self.emitters,
+            emitter_cdf: &self.cdf,
+            emitter_count: self.count,
+            emitter_power: self.power,
+            env_texels: &self.env_texels,
+            env_marginal: &self.env_marginal,
+            env_conditional: &self.env_conditional,
+            env_width: self.env_size[0],
+            env_height: self.env_size[1],
+            env_rotation: Float2::new(self.env_rotation[0], self.env_rotation[1]),
+            punctual: &self.punctual,
+            punctual_count: self.punctual_count,
+        }
+    }
 }
 
 /// The kernels compiled for one device with their scene uploaded, ready to trace.
@@ -623,21 +660,65 @@ impl<'d> ClTracer<'d> {
         self.image_budget = self.image_budget.min(bytes.max(1));
     }
 
-    /// Uploads the emitters (indices into this tracer's triangle order), which the shade
-    /// modes need.
-    pub(crate) fn set_lights(&mut self, emitters: &Emitters) -> Result<()> {
+    /// Uploads the emitters (indices into this tracer's triangle order) and the other
+    /// lights, which the shade modes need, after checking that the program was compiled
+    /// for those lights and that they fit in the device's memory.
+    pub(crate) fn set_lights(&mut self, emitters: &Emitters, lights: &Lights) -> Result<()> {
         let device = self.device;
-        // Buffers cannot be empty: a lone zero stands in for "no emitters".
+        let has = self.program.features();
+        if (lights.environment.is_some() && !has.environment)
+            || (!lights.punctual.is_empty() && !has.punctual)
+        {
+            return Err(Error::Invalid(format!(
+                "the program was compiled for {has:?}, not for this scene's lights"
+            )));
+        }
+        check_scene_memory(device, &[("the lights", lights.bytes())])?;
+        // Buffers cannot be empty: a lone zero stands in for "none".
         let (list, cdf) = if emitters.is_empty() {
             (vec![0u32], vec![1.0f32])
         } else {
             (emitters.triangles.clone(), emitters.cdf.clone())
         };
+        let f4 = |v: &[f32; 4]| Float4::new(v[0], v[1], v[2], v[3]);
+        let doing = "uploading the environment";
+        let (env_texels, env_marginal, env_conditional, env_size, env_rotation) =
+            match &lights.environment {
+                Some(env) => (
+                    upload(
+                        device,
+                        &env.texels.iter().map(f4).collect::<Vec<_>>(),
+                        doing,
+                    )?,
+                    upload(device, &env.marginal, doing)?,
+                    upload(device, &env.conditional, doing)?,
+                    [env.width, env.height],
+                    env.rotation,
+                ),
+                None => (
+                    upload(device, &[Float4::zero()], doing)?,
+                    upload(device, &[1.0f32], doing)?,
+                    upload(device, &[1.0f32], doing)?,
+                    [1, 1],
+                    [1.0, 0.0],
+                ),
+            };
+        let mut punctual: Vec<Float4> = lights.packed().iter().flatten().map(f4).collect();
+        if punctual.is_empty() {
+            punctual.push(Float4::zero());
+        }
         self.lights = Some(DeviceLights {
             emitters: upload(device, &list, "uploading emitters")?,
             cdf: upload(device, &cdf, "uploading emitters")?,
             count: emitters.triangles.len() as u32,
-            area: emitters.total_area,
+            power: emitters.total_power,
+            env_texels,
+            env_marginal,
+            env_conditional,
+            env_size,
+            env_rotation,
+            punctual: upload(device, &punctual, "uploading the punctual lights")?,
+            punctual_count: lights.punctual.len() as u32,
         });
         Ok(())
     }
@@ -807,7 +888,7 @@ impl<'d> ClTracer<'d> {
         require_kernel(&self.program, kernel)?;
         let name = kernel.name();
         if self.lights.is_none() {
-            self.set_lights(&Emitters::default())?;
+            self.set_lights(&Emitters::default(), &Lights::default())?;
         }
         let lights = self.lights.as_ref().expect("set above");
         let accum = PitchedBuffer::<Long4>::read_write(device, w, rows)?;
@@ -838,12 +919,7 @@ impl<'d> ClTracer<'d> {
             col0: region.x0,
             col_end: region.x1,
         };
-        let light_params = LightParams {
-            emitters: &lights.emitters,
-            emitter_cdf: &lights.cdf,
-            emitter_count: lights.count,
-            emitter_area: lights.area,
-        };
+        let light_params = lights.params();
         // The band (row0, row_end) and the sample change from launch to launch.
         let band = BandParams::new(camera, width);
         let mut builder = kernel_builder(device, &self.program, kernel, &self.scene)?;

@@ -11,6 +11,7 @@ use cltrace::bvh::Layout;
 use cltrace::camera::{CameraSettings, Projection, View};
 use cltrace::commands::frames::{FrameRange, Frames};
 use cltrace::commands::render::RenderRequest;
+use cltrace::input::lights::{EnvironmentFlags, EnvironmentSource, parse_environment_flag};
 use cltrace::input::scene_file::RenderSettings;
 use cltrace::output::HitsFormat;
 use cltrace::render::integrator::{Region, parse_sample_range};
@@ -54,6 +55,9 @@ pub struct RenderArgs {
 
     #[command(flatten)]
     settings: SettingsArgs,
+
+    #[command(flatten)]
+    environment: EnvironmentArgs,
 
     /// Also write the raw per-pixel hit records here (8 bytes a pixel: u32 triangle, f32
     /// distance; --hits-format v2 adds the barycentrics)
@@ -266,6 +270,37 @@ impl RenderArgs {
                 skip_existing: self.skip_existing,
             }),
             frame: 0,
+            environment: self.environment.into(),
+        }
+    }
+}
+
+/// The environment of `--shade path`, over the scene file's `[environment]` or `[sky]`.
+#[derive(Args)]
+struct EnvironmentArgs {
+    /// Light from every direction at infinity for `--shade path`: an equirectangular image
+    /// (.hdr, .exr, or any texture format; +y up, Mitsuba's orientation), or R,G,B for one
+    /// colour (a background that lights the scene); it replaces the scene's [environment]
+    /// or [sky] and the default sky [default: scene's, else none: without emitters or
+    /// other lights, rays that leave the scene see a fixed sky]
+    #[arg(long, value_name = "FILE|R,G,B", value_parser = parse_environment_flag)]
+    environment: Option<EnvironmentSource>,
+
+    /// Scales the environment's radiance (0 or more) [default: scene's, else 1]
+    #[arg(long, value_name = "X")]
+    environment_intensity: Option<f32>,
+
+    /// Turns the environment about +y, degrees, right-handed [default: scene's, else 0]
+    #[arg(long, value_name = "DEGREES", allow_hyphen_values = true)]
+    environment_rotate: Option<f32>,
+}
+
+impl From<EnvironmentArgs> for EnvironmentFlags {
+    fn from(a: EnvironmentArgs) -> EnvironmentFlags {
+        EnvironmentFlags {
+            source: a.environment,
+            intensity: a.environment_intensity,
+            rotate: a.environment_rotate,
         }
     }
 }

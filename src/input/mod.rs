@@ -3,6 +3,7 @@
 
 pub mod generate;
 mod gltf;
+pub mod lights;
 mod mtl;
 mod obj;
 mod ply;

@@ -92,6 +92,7 @@ use crate::bvh::Layout;
 use crate::camera::{CameraSettings, Projection, View};
 use crate::error::{Error, Result};
 use crate::input::generate::Generator;
+use crate::input::lights::{EnvironmentTable, LightTable, LightsDescription, SkyTable};
 use crate::input::load_mesh;
 use crate::input::scene::{Ground, PlacedMesh, SceneMeshes};
 use crate::material::{Bsdf, Material};
@@ -223,6 +224,8 @@ pub struct SceneDescription {
     /// The `[camera]` table's keyframes or turntable, if any.
     pub(crate) animation: Option<Animation>,
     pub(crate) render: RenderSettings,
+    /// The lights besides emitters: `[environment]` or `[sky]`, and `[[light]]` tables.
+    pub lights: LightsDescription,
 }
 
 #[derive(Deserialize)]
@@ -236,6 +239,9 @@ struct SceneFile {
     camera: CameraTable,
     #[serde(default)]
     render: RenderSettings,
+    environment: Option<Spanned<EnvironmentTable>>,
+    sky: Option<Spanned<SkyTable>>,
+    light: Option<Vec<Spanned<LightTable>>>,
 }
 
 /// The `mesh` key: one file name, or the `[[mesh]]` tables. (TOML itself refuses both in
@@ -288,37 +294,43 @@ struct Scale([f32; 3]);
 
 impl<'de> Deserialize<'de> for Scale {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        struct Visit;
-        impl<'de> serde::de::Visitor<'de> for Visit {
-            type Value = Scale;
-            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str("a number or three numbers [x, y, z]")
-            }
-            fn visit_f64<E: serde::de::Error>(self, v: f64) -> std::result::Result<Scale, E> {
-                Ok(Scale([v as f32; 3]))
-            }
-            fn visit_i64<E: serde::de::Error>(self, v: i64) -> std::result::Result<Scale, E> {
-                Ok(Scale([v as f32; 3]))
-            }
-            fn visit_u64<E: serde::de::Error>(self, v: u64) -> std::result::Result<Scale, E> {
-                Ok(Scale([v as f32; 3]))
-            }
-            fn visit_seq<A: serde::de::SeqAccess<'de>>(
-                self,
-                mut seq: A,
-            ) -> std::result::Result<Scale, A::Error> {
-                let mut xyz = Vec::new();
-                while let Some(v) = seq.next_element::<f32>()? {
-                    xyz.push(v);
-                }
-                let xyz: [f32; 3] = xyz.try_into().map_err(|v: Vec<f32>| {
-                    serde::de::Error::invalid_length(v.len(), &"three numbers [x, y, z]")
-                })?;
-                Ok(Scale(xyz))
-            }
-        }
-        d.deserialize_any(Visit)
+        Ok(Scale(one_or_three(d)?))
     }
+}
+
+/// One number for every axis or channel, or three: a `scale`, a light's power.
+pub(crate) fn one_or_three<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> std::result::Result<[f32; 3], D::Error> {
+    struct Visit;
+    impl<'de> serde::de::Visitor<'de> for Visit {
+        type Value = [f32; 3];
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a number or three numbers [x, y, z]")
+        }
+        fn visit_f64<E: serde::de::Error>(self, v: f64) -> std::result::Result<[f32; 3], E> {
+            Ok([v as f32; 3])
+        }
+        fn visit_i64<E: serde::de::Error>(self, v: i64) -> std::result::Result<[f32; 3], E> {
+            Ok([v as f32; 3])
+        }
+        fn visit_u64<E: serde::de::Error>(self, v: u64) -> std::result::Result<[f32; 3], E> {
+            Ok([v as f32; 3])
+        }
+        fn visit_seq<A: serde::de::SeqAccess<'de>>(
+            self,
+            mut seq: A,
+        ) -> std::result::Result<[f32; 3], A::Error> {
+            let mut xyz = Vec::new();
+            while let Some(v) = seq.next_element::<f32>()? {
+                xyz.push(v);
+            }
+            xyz.try_into().map_err(|v: Vec<f32>| {
+                serde::de::Error::invalid_length(v.len(), &"three numbers [x, y, z]")
+            })
+        }
+    }
+    d.deserialize_any(Visit)
 }
 
 /// A `[[mesh]]` table's `material`: every triangle of that mesh gets it.
@@ -706,6 +718,7 @@ impl SceneDescription {
             camera: CameraSettings::default(),
             animation: None,
             render: RenderSettings::default(),
+            lights: LightsDescription::default(),
         }
     }
 
@@ -775,6 +788,39 @@ impl SceneDescription {
             }
         };
         let ground = file.ground.map(|g| g.ground(&place)).transpose()?;
+        fn checked<T>(
+            place: &Place,
+            span: std::ops::Range<usize>,
+            r: std::result::Result<T, String>,
+        ) -> Result<T> {
+            r.map_err(|e| place.at(span, e))
+        }
+        let environment = match (file.environment, file.sky) {
+            (Some(_), Some(sky)) => {
+                return Err(place.at(
+                    sky.span(),
+                    "give an [environment] or a [sky] table, not both",
+                ));
+            }
+            (Some(env), None) => {
+                let span = env.span();
+                Some(checked(&place, span, env.into_inner().check(base))?)
+            }
+            (None, Some(sky)) => {
+                let span = sky.span();
+                Some(checked(&place, span, sky.into_inner().check())?)
+            }
+            (None, None) => None,
+        };
+        let punctual = file
+            .light
+            .unwrap_or_default()
+            .into_iter()
+            .map(|l| {
+                let span = l.span();
+                checked(&place, span, l.into_inner().check())
+            })
+            .collect::<Result<_>>()?;
         Ok(SceneDescription {
             meshes: SceneMeshes {
                 meshes,
@@ -784,6 +830,10 @@ impl SceneDescription {
             camera,
             animation,
             render: file.render,
+            lights: LightsDescription {
+                environment,
+                punctual,
+            },
         })
     }
 }

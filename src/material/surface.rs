@@ -30,6 +30,13 @@ pub struct SurfaceFeatures {
     /// them it reaches emitters by light samples alone and keeps the diffuse path
     /// tracer's speed (the models cost the H200 23% a ray: docs/bench/2026-12-03-bsdfs.md).
     pub bsdfs: bool,
+    /// An environment light (`ENVIRONMENT`, cl/environment.cl), which also turns on the
+    /// weighing of light and BSDF samples (`MIS`); not the surface's, but compiled in the
+    /// same way. [`Surface::features`] leaves it off; the renderer sets it from the scene's
+    /// lights.
+    pub environment: bool,
+    /// Point, spot or directional lights (`PUNCTUAL`, cl/punctual.cl); set as `environment`.
+    pub punctual: bool,
 }
 /// [`Surface::flags`] bit: the vertices have texture coordinates.
 pub const SURFACE_UVS: u32 = 2;
@@ -150,6 +157,8 @@ impl Surface {
                 .materials
                 .iter()
                 .any(|m| m.bsdf != crate::material::Bsdf::Diffuse.code() || m.metallic > 0.0),
+            environment: false,
+            punctual: false,
         }
     }
 

@@ -18,6 +18,7 @@ use crate::camera::Pinhole;
 use crate::geometry::Ray;
 use crate::intersect::ClosestHit;
 use crate::intersect::{TRIANGLE_TWO_SIDED, Triangle};
+use crate::light::{Lights, Punctual, punctual};
 use crate::material::Material;
 use crate::material::surface::{BOUNCE_CONE_SPREAD, Surface};
 
@@ -121,34 +122,46 @@ pub struct SampleSettings {
 }
 
 /// The emitting triangles, for next-event estimation: indices into the tracer's triangles
-/// and the cumulative distribution of their areas.
+/// and the cumulative distribution of their power (area times mean emission), so that a
+/// dim emitter beside a bright one takes few light samples (pbrt's power light sampler).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub(crate) struct Emitters {
     pub(crate) triangles: Vec<u32>,
-    /// `cdf[i]`: the area of emitters 0..=i over the total, the last one exactly 1.
+    /// `cdf[i]`: the power of emitters 0..=i over the total, the last one exactly 1.
     pub(crate) cdf: Vec<f32>,
-    pub(crate) total_area: f32,
+    /// The emitters' power: their areas times their materials' mean emission, summed.
+    pub(crate) total_power: f32,
+}
+
+/// The density per area with which light samples pick a point of an emitter of material
+/// `m`: its power per area over all emitters' (`emitter_density` in cl/integrator.cl).
+pub(crate) fn emitter_density(m: &Material, total_power: f32) -> f32 {
+    let le = m.emission;
+    (le[0] + le[1] + le[2]) * (1.0 / 3.0) / total_power
 }
 
 impl Emitters {
     pub(crate) fn new(triangles: &[Triangle], materials: &[Material]) -> Self {
         let mut list = Vec::new();
-        let mut areas = Vec::new();
+        let mut powers = Vec::new();
         for (i, t) in triangles.iter().enumerate() {
-            if materials[t.material as usize].emits() {
+            let m = &materials[t.material as usize];
+            if m.emits() {
                 let area = 0.5
                     * (Vec3::from(t.v1) - Vec3::from(t.v0))
                         .cross(Vec3::from(t.v2) - Vec3::from(t.v0))
                         .length();
-                if area > 0.0 {
+                let le = m.emission;
+                let power = area as f64 * (le[0] + le[1] + le[2]) as f64 / 3.0;
+                if power > 0.0 {
                     list.push(i as u32);
-                    areas.push(area as f64);
+                    powers.push(power);
                 }
             }
         }
-        let total: f64 = areas.iter().sum();
+        let total: f64 = powers.iter().sum();
         let mut acc = 0.0;
-        let mut cdf: Vec<f32> = areas
+        let mut cdf: Vec<f32> = powers
             .iter()
             .map(|a| {
                 acc += a;
@@ -161,7 +174,7 @@ impl Emitters {
         Emitters {
             triangles: list,
             cdf,
-            total_area: total as f32,
+            total_power: total as f32,
         }
     }
 
@@ -184,8 +197,8 @@ impl Emitters {
     }
 }
 
-/// The sky seen by rays that leave a scene without emitters: white at the horizon, blue
-/// overhead, grey below.
+/// The sky seen by rays that leave a scene without emitters or other lights: white at the
+/// horizon, blue overhead, grey below.
 pub(crate) fn sky(d: Vec3) -> Vec3 {
     let up = d.y / d.length();
     if up >= 0.0 {
@@ -249,15 +262,34 @@ fn camera_cone(camera: &Pinhole, t: f32) -> f32 {
     t * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
 }
 
-/// One sample of pixel (x, y): its radiance and the number of rays traced for it. `mis`:
-/// light and BSDF samples weighed against each other, as for scenes with other models
-/// than Lambert (`BSDFS` in cl/integrator.cl); else emitters are found by light samples
+/// Whether the path tracer weighs light and BSDF samples against each other (`MIS` in
+/// cl/integrator.cl): for scenes with other models than Lambert, or an environment (whose
+/// wide lobes light samples alone find poorly). Else emitters are found by light samples
 /// alone after the camera ray.
+pub(crate) fn weighs_samples(surface: &Surface, lights: &Lights) -> bool {
+    surface.features().bsdfs || lights.environment.is_some()
+}
+
+/// `scatter_from` in cl/integrator.cl: what the shading point scatters towards the eye of
+/// light from unit direction `l`, per unit of irradiance, and the density with which BSDF
+/// sampling picks `l`.
+fn scatter_from(sh: &Shading, lambert: bool, frame: [Vec3; 3], wo_l: Vec3, l: Vec3) -> (Vec3, f32) {
+    let [tn, bn, n] = frame;
+    if lambert {
+        let cos_here = n.dot(l).max(0.0);
+        return (sh.albedo * (cos_here / PI), cos_here / PI);
+    }
+    sh.eval(wo_l, Vec3::new(l.dot(tn), l.dot(bn), l.dot(n)))
+}
+
+/// One sample of pixel (x, y): its radiance and the number of rays traced for it. `mis`:
+/// [`weighs_samples`].
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn sample_pixel(
     tracer: &(impl ClosestHit + ?Sized),
     surface: &Surface,
     emitters: &Emitters,
+    lights: &Lights,
     mis: bool,
     camera: &Pinhole,
     settings: &SampleSettings,
@@ -270,9 +302,16 @@ pub(crate) fn sample_pixel(
     let occluded =
         |ray: &Ray, t_max: f32| trace_masked(tracer, surface, ray, t_max, true).is_some();
     let mut rays = 1;
+    // What a path tracer's ray that leaves the scene sees, and the density with which
+    // light samples find it (0 for the default sky, which they do not sample).
+    let background = |d: Vec3| match &lights.environment {
+        Some(env) => env.radiance(d.normalize()),
+        None if emitters.is_empty() && lights.punctual.is_empty() => (sky(d), 0.0),
+        None => (Vec3::ZERO, 0.0),
+    };
     let Some((i, t)) = trace_masked(tracer, surface, &ray, f32::INFINITY, false) else {
         let background = match settings.lighting {
-            Lighting::Path { .. } if emitters.is_empty() => sky(ray.dir),
+            Lighting::Path { .. } => background(ray.dir).0,
             _ => Vec3::ZERO,
         };
         return (background, rays);
@@ -328,9 +367,14 @@ pub(crate) fn sample_pixel(
             let mut last_pdf = 0.0f32;
             loop {
                 let Some((i, t)) = hit else {
-                    if emitters.is_empty() {
-                        radiance += throughput * sky(ray.dir);
+                    let (mut le, env_pdf) = background(ray.dir);
+                    // Weighed against the environment's light samples, which could have
+                    // found it.
+                    if last_pdf > 0.0 {
+                        let r = env_pdf / last_pdf;
+                        le *= 1.0 / (1.0 + r * r);
                     }
+                    radiance += throughput * le;
                     break;
                 };
                 cone = match bounce {
@@ -346,7 +390,9 @@ pub(crate) fn sample_pixel(
                 } else if last_pdf > 0.0 && sp.emission.max_element() > 0.0 {
                     let ng = sp.ng;
                     let cos = (ng.x * ray.dir.x + ng.y * ray.dir.y + ng.z * ray.dir.z).abs();
-                    let r = t * t / (cos * emitters.total_area) / last_pdf;
+                    let density =
+                        emitter_density(&surface.material(&tris[i]), emitters.total_power);
+                    let r = t * t * density / cos / last_pdf;
                     radiance += throughput * sp.emission * (1.0 / (1.0 + r * r));
                 } else if last_pdf == 0.0 {
                     radiance += throughput * sp.emission;
@@ -364,7 +410,9 @@ pub(crate) fn sample_pixel(
                 let wo_l = local(wo);
                 let side = |d: Vec3| d.x * ng.x + d.y * ng.y + d.z * ng.z;
                 let dim = bounce_dim(bounce);
-                if !emitters.is_empty() && !sh.all_delta() {
+                let frame = [tn, bn, n];
+                let lit = !sh.all_delta();
+                if !emitters.is_empty() && lit {
                     let e = &tris[emitters.triangles[emitters.pick(s.get(dim))] as usize];
                     let (u1, u2) = (s.get(dim + 1), s.get(dim + 2));
                     let q = triangle_point(
@@ -379,21 +427,44 @@ pub(crate) fn sample_pixel(
                     let l = w / d2.sqrt();
                     let cos_there = emitting_normal(e, l).dot(-l);
                     if cos_there > 0.0 && side(l) > 0.0 {
-                        let (f, bsdf_pdf) = if lambert {
-                            let cos_here = n.dot(l).max(0.0);
-                            (sh.albedo * (cos_here / PI), cos_here / PI)
-                        } else {
-                            sh.eval(wo_l, local(l))
-                        };
+                        let (f, bsdf_pdf) = scatter_from(&sh, lambert, frame, wo_l, l);
                         if f.max_element() > 0.0 {
                             rays += 1;
                             if !occluded(&Ray::new(origin, l), d2.sqrt() * (1.0 - 1e-4)) {
                                 let su = u1.sqrt();
                                 let le = surface.emitted(e, 1.0 - su, u2 * su);
-                                let light_pdf = d2 / (cos_there * emitters.total_area);
+                                let density =
+                                    emitter_density(&surface.material(e), emitters.total_power);
+                                let light_pdf = d2 * density / cos_there;
                                 let r = bsdf_pdf / light_pdf;
                                 let weight = if mis { 1.0 / (1.0 + r * r) } else { 1.0 };
                                 radiance += throughput * f * le * (weight / light_pdf);
+                            }
+                        }
+                    }
+                }
+                if let Some(env) = lights.environment.as_ref().filter(|_| lit) {
+                    let (l, le, env_pdf) = env.sample(s.get(dim + 8), s.get(dim + 9));
+                    if env_pdf > 0.0 && side(l) > 0.0 {
+                        let (f, bsdf_pdf) = scatter_from(&sh, lambert, frame, wo_l, l);
+                        if f.max_element() > 0.0 {
+                            rays += 1;
+                            if !occluded(&Ray::new(origin, l), f32::INFINITY) {
+                                let r = bsdf_pdf / env_pdf;
+                                radiance += throughput * f * le * (1.0 / (1.0 + r * r) / env_pdf);
+                            }
+                        }
+                    }
+                }
+                // Every punctual light, each by one shadow ray: nothing else can find them.
+                for light in lights.punctual.iter().filter(|_| lit).map(Punctual::pack) {
+                    let (l, reach, e) = punctual::incident(&light, origin);
+                    if e.max_element() > 0.0 && side(l) > 0.0 {
+                        let (f, _) = scatter_from(&sh, lambert, frame, wo_l, l);
+                        if f.max_element() > 0.0 {
+                            rays += 1;
+                            if !occluded(&Ray::new(origin, l), reach * (1.0 - 1e-4)) {
+                                radiance += throughput * f * e;
                             }
                         }
                     }
@@ -638,6 +709,7 @@ pub(crate) fn render_samples(
     tracer: &(impl ClosestHit + ?Sized),
     surface: &Surface,
     emitters: &Emitters,
+    lights: &Lights,
     camera: &Pinhole,
     settings: &SampleSettings,
     samples: std::ops::Range<u32>,
@@ -646,7 +718,7 @@ pub(crate) fn render_samples(
 ) {
     let region = accumulation.region;
     let width = accumulation.width;
-    let mis = surface.features().bsdfs;
+    let mis = weighs_samples(surface, lights);
     let rays: u64 = accumulation
         .pixels
         .par_chunks_mut(region.width().max(1) as usize)
@@ -664,6 +736,7 @@ pub(crate) fn render_samples(
                         tracer,
                         surface,
                         emitters,
+                        lights,
                         mis,
                         camera,
                         settings,

@@ -38,11 +38,13 @@ impl Sampler {
     }
 }
 
-/// Dimensions of the stream: 0-1 jitter the pixel, then `DIMS_PER_BOUNCE` per bounce.
-pub const DIMS_PER_BOUNCE: u32 = 8;
+/// Dimensions of the stream: 0-1 jitter the pixel, then `DIMS_PER_BOUNCE` per bounce: the
+/// emitter and its point (+0 to +2), Russian roulette (+3), the BSDF sample's direction,
+/// lobe and side (+4 to +7), the environment's light sample (+8, +9).
+pub const DIMS_PER_BOUNCE: u32 = 10;
 
 /// The first dimension of the lens point of a thin-lens camera ([`disk_point`]): far above
-/// any bounce's (at most about 2 + 8 · 1025), so that opening the lens shifts no other
+/// any bounce's (at most about 2 + 10 · 1025), so that opening the lens shifts no other
 /// number and a pinhole's samples stay bit for bit what they were.
 pub const LENS_DIM: u32 = 0x8000_0000;
 /// Pairs [`disk_point`] tries before it gives the disk's centre.
