@@ -288,6 +288,50 @@ fn thin_dielectric_pane_regions_match_mitsuba() {
     regions_match_mitsuba("pane");
 }
 
+// The lights other than emitting surfaces (issue 17): an environment map, a constant
+// environment colour, point, spot and directional lights, in scenes without an emitting
+// surface (compare.py's `env_scene` to `directional_scene`). Ignored until the renderer reads
+// `[environment]` and `[[light]]`.
+
+/// A diffuse and a rough gold sphere under an environment map (nearest texels, rotated 60
+/// degrees about +y, intensity 1.25) with a sun of 2 x 2 texels: the floor, the spheres and
+/// the map seen directly.
+#[test]
+#[ignore = "needs the lights of issue 17"]
+fn environment_map_regions_match_mitsuba() {
+    regions_match_mitsuba("env");
+}
+
+/// The diffuse sphere under a constant environment colour: the background seen directly is
+/// its colour times its intensity exactly.
+#[test]
+#[ignore = "needs the lights of issue 17"]
+fn constant_environment_regions_match_mitsuba() {
+    regions_match_mitsuba("background");
+}
+
+/// A point light: the floor lit and in the sphere's hard shadow.
+#[test]
+#[ignore = "needs the lights of issue 17"]
+fn point_light_regions_match_mitsuba() {
+    regions_match_mitsuba("point");
+}
+
+/// A spot light at an angle: the floor in its full beam, in the falloff band, outside the
+/// cone and in the sphere's shadow.
+#[test]
+#[ignore = "needs the lights of issue 17"]
+fn spot_light_regions_match_mitsuba() {
+    regions_match_mitsuba("spot");
+}
+
+/// A directional light at an angle: the floor lit and in the sphere's hard shadow.
+#[test]
+#[ignore = "needs the lights of issue 17"]
+fn directional_light_regions_match_mitsuba() {
+    regions_match_mitsuba("directional");
+}
+
 /// The comparison can fail: the quad scene with its floor's albedo 10% too dark (a copy of
 /// its files, one `Kd` changed) is rejected on the floor, and only there (the emitter's
 /// back, black in both, still agrees).

@@ -4,8 +4,10 @@ must agree region by region within the noise of the two estimates plus a 1% bias
 
 One description per scene (SCENES below) is written out as the files both renderers read:
 one OBJ per object (triangles, no normals; MTL materials `Kd`/`Ke`, a `map_Kd` texture) and
-a cltrace scene file (scene.toml: the meshes, [camera] and [render]); Mitsuba loads the same
-OBJ files, with a bsdf and an area emitter per object from the same materials.
+a cltrace scene file (scene.toml: the meshes, [camera] and [render], and where a scene has
+them [environment] and [[light]]); Mitsuba loads the same OBJ files, with a bsdf and an area
+emitter per object from the same materials, and the same environment (an envmap of the same
+texels, or a constant) and point, spot and directional lights.
 
     compare.py scenes    --out DIR                       the cltrace inputs only
     compare.py reference --out DIR [--spp N] [--size WxH] inputs + Mitsuba references
@@ -294,6 +296,180 @@ def textured_scene():
     }
 
 
+# The lights other than emitting surfaces: an environment at infinity (a map or a constant
+# colour) and point, spot and directional lights. A scene may name `environment` (a dict:
+# "file" with "texels" the map's texels, or "color"; "intensity", "rotate" in degrees about
+# +y) and `lights` (a list of dicts as cltrace's `[[light]]` tables: "type", "position",
+# "intensity", "direction", "cutoff", "beam", "irradiance"), and then need no area emitter.
+
+ENV_SIZE = (64, 32)  # the map's texels (width, height): u along the width, v down the height
+ENV_ROTATE = 60.0  # degrees about +y (right-handed)
+ENV_SUN_TOWARDS = (-0.7, 0.7, 0.1)  # the sun's world direction (from the scene towards it)
+ENV_SUN_RADIANCE = (200.0, 185.0, 160.0)  # each of its 2 x 2 texels
+ENV_UPSAMPLE = 8  # Mitsuba's copy of the map: each texel 8 x 8 (README: why, and why exact)
+
+
+def rotate_y(d, degrees):
+    """`d` rotated about +y by `degrees`, right-handed (Mitsuba's rotate([0, 1, 0], angle))."""
+    a = math.radians(degrees)
+    x, y, z = d
+    return (x * math.cos(a) + z * math.sin(a), y, -x * math.sin(a) + z * math.cos(a))
+
+
+def env_uv(d):
+    """Mitsuba's envmap coordinates of a direction in the map's frame: u = atan2(x, -z) / 2 pi
+    wrapped to [0, 1), v = acos(y) / pi (v = 0 at +y, the image's top row)."""
+    n = math.sqrt(sum(c * c for c in d))
+    x, y, z = (c / n for c in d)
+    return (math.atan2(x, -z) / (2.0 * math.pi)) % 1.0, math.acos(max(-1.0, min(1.0, y))) / math.pi
+
+
+def env_texels():
+    """The environment map (H x W x 3, float32, row 0 the top: v = 0, +y): a smooth sky, its
+    texel (i, j) the value at its centre u = (i + 0.5) / W, v = (j + 0.5) / H (the map's own
+    frame, before `rotate`): from white-yellow at the horizon to blue at the zenith, a brown
+    ground below the horizon darkening to the nadir, all brighter by up to 30% towards u = 0
+    (the map's -z) and darker opposite, so that a rotation shows without the sun too; and a
+    sun of 2 x 2 texels of ENV_SUN_RADIANCE, its centre the texel corner nearest to
+    ENV_SUN_TOWARDS turned back by ENV_ROTATE (so that the rotated map puts it there)."""
+    w, h = ENV_SIZE
+    u = (np.arange(w) + 0.5) / w
+    v = (np.arange(h) + 0.5) / h
+    y = np.cos(math.pi * v)[:, None, None]
+    phi = 2.0 * math.pi * u[None, :, None]
+    horizon, zenith = np.array((0.9, 0.85, 0.7)), np.array((0.2, 0.4, 0.9))
+    ground, nadir = np.array((0.3, 0.25, 0.2)), np.array((0.08, 0.07, 0.06))
+    up, down = np.sqrt(np.clip(y, 0.0, 1.0)), np.sqrt(np.clip(-y, 0.0, 1.0))
+    sky = np.where(y >= 0.0, horizon * (1.0 - up) + zenith * up, ground * (1.0 - down) + nadir * down)
+    sky = sky * (1.0 + 0.3 * np.cos(phi))
+    su, sv = env_uv(rotate_y(ENV_SUN_TOWARDS, -ENV_ROTATE))
+    col, row = int(round(su * w)) - 1, int(round(sv * h)) - 1
+    for j in (row, row + 1):
+        for i in (col, col + 1):
+            sky[j, i % w] = ENV_SUN_RADIANCE
+    return sky.astype(np.float32)
+
+
+def env_upsampled(tex, k=ENV_UPSAMPLE):
+    """Mitsuba's copy of a nearest-looked-up map: Mitsuba's envmap is bilinear only, its
+    column i at u = (i + 0.5) / W, its row j at v = j / (H - 1). Each texel becomes k
+    columns, and the rows are k H + 1, row r at v = r / (k H): the nearest texel's value
+    there, or on a texel edge (r a multiple of k) the mean of the two texels it parts. The
+    bilinear function of that equals the nearest function but in bands of 1/k texel along
+    the texel edges, where it is a ramp antisymmetric about the edge: integrals over the
+    sphere (the light reaching anything) agree exactly but for the sin(theta) weight across a
+    band, a second-order term (README)."""
+    h, w = tex.shape[:2]
+    cols = np.repeat(tex, k, axis=1)
+    rows = []
+    for r in range(k * h + 1):
+        if r % k == 0 and 0 < r < k * h:
+            rows.append((cols[r // k - 1] + cols[r // k]) / 2.0)
+        else:
+            rows.append(cols[min(r // k, h - 1)])
+    return np.ascontiguousarray(np.stack(rows), dtype=np.float32)
+
+
+def unit(v):
+    n = math.sqrt(sum(c * c for c in v))
+    return tuple(c / n for c in v)
+
+
+def lights_floor():
+    return obj("floor", WHITE, quad((-2, 0, 2), (2, 0, 2), (2, 0, -2), (-2, 0, -2))[0])
+
+
+def lights_sphere(center=(0.0, 0.5, 0.0), radius=0.5, m=None):
+    return obj("sphere", m or material((0.3, 0.5, 0.8)), uv_sphere(center, radius, 16, 10, closed=True), shared=True)
+
+
+SPHERE_CAMERA = {"eye": (0.0, 1.3, 2.6), "look_at": (0.0, 0.45, 0.0), "up": (0, 1, 0), "fov": 40.0}
+
+
+def env_scene():
+    """A diffuse sphere (left) and a rough gold one (right) on the floor under the
+    environment map (env_texels), rotated by ENV_ROTATE: no emitting surface. The camera,
+    lower than the sphere scene's, sees the map over the floor's far edge (the top of the
+    image: below and above the horizon); the sun, to the left and up, is not in view but
+    casts the spheres' soft shadows to the right."""
+    gold = material((1, 1, 1), bsdf={"type": "conductor", "roughness": 0.4, **GOLD})
+    return {
+        "name": "env",
+        "doc": "an environment map (nearest texels, rotated 60 degrees) with a sun",
+        "objects": [
+            lights_floor(),
+            obj("diffuse", material((0.3, 0.5, 0.8)), uv_sphere((-0.55, 0.4, 0.0), 0.4, 16, 10, closed=True),
+                shared=True),
+            obj("gold", gold, uv_sphere((0.55, 0.4, 0.0), 0.4, 16, 10, closed=True), shared=True),
+        ],
+        "environment": {"file": "env.exr", "texels": env_texels, "intensity": 1.25, "rotate": ENV_ROTATE},
+        "camera": {"eye": (0.0, 0.9, 3.2), "look_at": (0.0, 0.45, 0.0), "up": (0, 1, 0), "fov": 40.0},
+        "max_bounces": 8,
+    }
+
+
+def background_scene():
+    """The diffuse sphere on the floor under a constant environment (a background that
+    lights the scene, furnace-like): seen directly over the floor's far edge it is exactly
+    its colour times its intensity in both."""
+    return {
+        "name": "background",
+        "doc": "a constant environment colour",
+        "objects": [lights_floor(), lights_sphere()],
+        "environment": {"color": (0.5, 0.6, 0.8), "intensity": 1.5},
+        "camera": SPHERE_CAMERA,
+        "max_bounces": 8,
+    }
+
+
+def point_scene():
+    """The diffuse sphere on the floor lit by a point light up to the left: its hard shadow
+    on the floor to the right, partly behind it."""
+    return {
+        "name": "point",
+        "doc": "a point light",
+        "objects": [lights_floor(), lights_sphere()],
+        "lights": [{"type": "point", "position": (-0.7, 1.4, 0.3), "intensity": (4.0, 3.6, 3.0)}],
+        "camera": SPHERE_CAMERA,
+        "max_bounces": 8,
+        "regions": "light",
+    }
+
+
+def spot_scene():
+    """The diffuse sphere on the floor and a spot light up to the left and in front, aimed
+    at the floor in front of the sphere at an angle (28 degrees off the vertical): cutoff 25
+    and beam 15 degrees, so that the falloff band (linear in angle between, as Mitsuba's) is
+    a ring several pixels wide around the beam's ellipse, all in view; the sphere, at the
+    cone's edge, is lit in part and casts a shadow to the right."""
+    position, target = (-0.8, 1.8, 1.2), (0.0, 0.0, 0.7)
+    return {
+        "name": "spot",
+        "doc": "a spot light (cutoff 25, beam 15 degrees)",
+        "objects": [lights_floor(), lights_sphere()],
+        "lights": [{"type": "spot", "position": position, "intensity": (12.0, 12.0, 10.0),
+                    "direction": unit([t - p for t, p in zip(target, position)]), "cutoff": 25.0, "beam": 15.0}],
+        "camera": SPHERE_CAMERA,
+        "max_bounces": 8,
+        "regions": "light",
+    }
+
+
+def directional_scene():
+    """The diffuse sphere on the floor lit by a directional light travelling down, to the
+    left and away from the camera: the sphere's hard shadow on the floor behind it to the
+    left."""
+    return {
+        "name": "directional",
+        "doc": "a directional light",
+        "objects": [lights_floor(), lights_sphere()],
+        "lights": [{"type": "directional", "direction": unit((-0.5, -0.7, -0.5)), "irradiance": (2.0, 1.8, 1.5)}],
+        "camera": SPHERE_CAMERA,
+        "max_bounces": 8,
+        "regions": "light",
+    }
+
+
 SCENES = {
     s()["name"]: s
     for s in (
@@ -309,6 +485,11 @@ SCENES = {
         rough_plastic_scene,
         rough_plastic_split_scene,
         pane_scene,
+        env_scene,
+        background_scene,
+        point_scene,
+        spot_scene,
+        directional_scene,
     )
 }
 
@@ -342,6 +523,40 @@ def write_png(path, pixels):
         f.write(chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, colour, 0, 0, 0)))
         f.write(chunk(b"IDAT", zlib.compress(raw, 9)))
         f.write(chunk(b"IEND", b""))
+
+
+def write_exr(path, rgb):
+    """A float32 RGB OpenEXR file (H x W x 3, row 0 the top), uncompressed scanlines: the
+    environment map, written with numpy alone (Mitsuba reads it back for its copy)."""
+    rgb = np.ascontiguousarray(rgb, dtype="<f4")
+    h, w = rgb.shape[:2]
+
+    def attr(name, kind, value):
+        return name.encode() + b"\x00" + kind.encode() + b"\x00" + struct.pack("<i", len(value)) + value
+
+    channels = b"".join(c.encode() + b"\x00" + struct.pack("<iB3xii", 2, 0, 1, 1) for c in "BGR") + b"\x00"
+    window = struct.pack("<iiii", 0, 0, w - 1, h - 1)
+    header = b"".join([
+        b"\x76\x2f\x31\x01" + struct.pack("<i", 2),
+        attr("channels", "chlist", channels),
+        attr("compression", "compression", b"\x00"),
+        attr("dataWindow", "box2i", window),
+        attr("displayWindow", "box2i", window),
+        attr("lineOrder", "lineOrder", b"\x00"),
+        attr("pixelAspectRatio", "float", struct.pack("<f", 1.0)),
+        attr("screenWindowCenter", "v2f", struct.pack("<ff", 0.0, 0.0)),
+        attr("screenWindowWidth", "float", struct.pack("<f", 1.0)),
+        b"\x00",
+    ])
+    line = 8 + 3 * 4 * w  # y, size, then the channels' rows in the header's order (B, G, R)
+    start = len(header) + 8 * h
+    with open(path, "wb") as f:
+        f.write(header)
+        f.write(b"".join(struct.pack("<Q", start + y * line) for y in range(h)))
+        for y in range(h):
+            f.write(struct.pack("<ii", y, 3 * 4 * w))
+            for c in (2, 1, 0):
+                f.write(rgb[y, :, c].tobytes())
 
 
 def read_png_grey(path):
@@ -444,6 +659,9 @@ def write_inputs(scene, out, width, height, spp, seed=0):
                 else:
                     f.write(f"f {i} {i + 1} {i + 2}\n")
         paths.append(path)
+    env = scene.get("environment")
+    if env and "file" in env:
+        write_exr(os.path.join(out, env["file"]), env["texels"]())
     cam = scene["camera"]
     vec = lambda v: "[" + ", ".join(fmt(x) for x in v) + "]"  # noqa: E731
     with open(os.path.join(out, "scene.toml"), "w") as f:
@@ -453,6 +671,16 @@ def write_inputs(scene, out, width, height, spp, seed=0):
             f.write(f'\n[[mesh]]\nfile = "{o["name"]}.obj"\n')
             if o["material"]["bsdf"]:
                 f.write(f"material = {toml_material(o['material'])}\n")
+        if env:
+            f.write("\n[environment]\n")
+            f.write(f'file = "{env["file"]}"\n' if "file" in env else f"color = {vec(env['color'])}\n")
+            f.write(f"intensity = {fmt(env.get('intensity', 1.0))}\nrotate = {fmt(env.get('rotate', 0.0))}\n")
+        for light in scene.get("lights", []):
+            f.write(f'\n[[light]]\ntype = "{light["type"]}"\n')
+            for key in ("position", "intensity", "direction", "cutoff", "beam", "irradiance"):
+                if key in light:
+                    x = light[key]
+                    f.write(f"{key} = {vec(x) if isinstance(x, (tuple, list)) else fmt(x)}\n")
         f.write("\n[camera]\n")
         f.write(f"eye = {vec(cam['eye'])}\nlook_at = {vec(cam['look_at'])}\nup = {vec(cam['up'])}\n")
         f.write(f"fov = {fmt(cam['fov'])}\nwidth = {width}\nheight = {height}\n")
@@ -577,9 +805,57 @@ def mitsuba_scene(mi, scene, out, width, height, spp, max_bounces):
             # cltrace shades a back face like the front.
             shape["bsdf"] = {"type": "twosided", "material": {"type": "diffuse", "reflectance": reflectance}}
         d[o["name"]] = shape
+    d.update(mitsuba_lights(mi, scene, out))
     # optimize=False: no merging of the objects of one bsdf into one shape (the region map
     # tells them apart by shape).
     return mi.load_dict(d, optimize=False)
+
+
+def mitsuba_lights(mi, scene, out):
+    """The Mitsuba emitters of a scene's environment and lights (README: the correspondence)."""
+    rgb = lambda v: {"type": "rgb", "value": list(v) if isinstance(v, (tuple, list)) else [v] * 3}  # noqa: E731
+    d = {}
+    env = scene.get("environment")
+    if env and "file" in env:
+        # Mitsuba's envmap has no nearest lookup (filter_type is not one of its parameters
+        # in 3.9.1: load_dict rejects it as unreferenced): it gets the file's texels (read
+        # back, so exactly what cltrace reads) upsampled so that its bilinear function is
+        # the nearest one but in thin bands that cancel (env_upsampled).
+        tex = np.array(mi.Bitmap(os.path.join(out, env["file"])).convert(
+            mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32, False), dtype=np.float32)
+        d["environment"] = {
+            "type": "envmap",
+            "bitmap": mi.Bitmap(env_upsampled(tex), mi.Bitmap.PixelFormat.RGB),
+            "scale": env.get("intensity", 1.0),
+            "to_world": mi.ScalarTransform4f().rotate([0, 1, 0], env.get("rotate", 0.0)),
+        }
+    elif env:
+        # `constant` has no scale: the intensity multiplies its radiance.
+        d["environment"] = {"type": "constant", "radiance": rgb([env.get("intensity", 1.0) * c for c in env["color"]])}
+    for n, light in enumerate(scene.get("lights", [])):
+        kind = light["type"]
+        if kind == "point":
+            e = {"type": "point", "position": list(light["position"]), "intensity": rgb(light["intensity"])}
+        elif kind == "spot":
+            cutoff = light.get("cutoff", 20.0)
+            p = light["position"]
+            e = {
+                "type": "spot",
+                "intensity": rgb(light["intensity"]),
+                "cutoff_angle": cutoff,
+                "beam_width": light.get("beam", 0.75 * cutoff),
+                # The spot's axis is its local +z: look_at turns it towards the target.
+                "to_world": mi.ScalarTransform4f().look_at(
+                    origin=list(p), target=[a + b for a, b in zip(p, light["direction"])],
+                    up=[0, 1, 0] if abs(unit(light["direction"])[1]) < 0.9 else [1, 0, 0],
+                ),
+            }
+        elif kind == "directional":
+            e = {"type": "directional", "direction": list(light["direction"]), "irradiance": rgb(light["irradiance"])}
+        else:
+            raise ValueError(f"no Mitsuba emitter for a {kind!r} light")
+        d[f"light_{n}"] = e
+    return d
 
 
 def region_map(mi, loaded, scene, width, height):
@@ -590,6 +866,9 @@ def region_map(mi, loaded, scene, width, height):
     sensor = loaded.sensors()[0]
     names = [o["name"] for o in scene["objects"]]
     checker = scene.get("regions") == "checker"
+    by_light = scene.get("regions") == "light"
+    kinds = names + ["floor/colour 0", "floor/colour 1", "floor/marker", "environment"]
+    kinds += [f"floor/{c}" for c in LIGHT_CLASSES]
     k = SUBSAMPLES
     offsets = [0.02 + 0.96 * i / (k - 1) for i in range(k)]
     label = np.full((height, width), -1, np.int64)
@@ -603,9 +882,12 @@ def region_map(mi, loaded, scene, width, height):
                     )
                     si = loaded.ray_intersect(ray)
                     if not si.is_valid():
-                        seen.add(None)
+                        # A miss sees the environment, if any (the same function in both).
+                        seen.add(kinds.index("environment") if scene.get("environment") else None)
                         continue
                     what = names.index(si.shape.id())
+                    if by_light and names[what] == "floor":
+                        what = kinds.index("floor/" + light_class(mi, loaded, si, scene["lights"][0]))
                     if checker and scene["objects"][what]["material"]["map_kd"]:
                         # The floor's square from the hit's position (uv (0,0) at x=-1, z=+1).
                         u, v = (si.p[0] + 1.0) / 2.0, (1.0 - si.p[2]) / 2.0
@@ -615,7 +897,6 @@ def region_map(mi, loaded, scene, width, height):
                     seen.add(what)
             if len(seen) == 1 and None not in seen:
                 label[y, x] = seen.pop()
-    kinds = names + ["floor/colour 0", "floor/colour 1", "floor/marker"]
     regions, out = [], np.full((height, width), UNCHECKED, np.uint8)
     least = max(4, width * height // 256)
     rows = ["top", "bottom"] if TILES == 2 else [f"row {r}" for r in range(TILES)]
@@ -635,6 +916,32 @@ def region_map(mi, loaded, scene, width, height):
                 out[mask] = len(regions)
                 regions.append({"index": len(regions), "name": f"{kind} {rows[ty]}-{cols[tx]}", "pixels": n})
     return out, regions
+
+
+LIGHT_CLASSES = ("lit", "shadow", "beam", "falloff", "outside")
+
+
+def light_class(mi, loaded, si, light):
+    """What a point of the floor gets of a light: a spot's "outside" (beyond its cutoff),
+    "shadow" (the light occluded), a spot's "beam" (full) or "falloff" (between beam and
+    cutoff), a point or directional light's "lit"."""
+    p = np.array(si.p, dtype=np.float64)
+    if light["type"] == "directional":
+        ray = si.spawn_ray(mi.Vector3f(*[-c for c in unit(light["direction"])]))
+    else:
+        ray = si.spawn_ray_to(mi.Point3f(*light["position"]))
+    angle = None
+    if light["type"] == "spot":
+        to_p = unit(p - np.array(light["position"]))
+        cos = float(np.dot(to_p, unit(light["direction"])))
+        angle = math.degrees(math.acos(max(-1.0, min(1.0, cos))))
+        if angle >= light.get("cutoff", 20.0):
+            return "outside"
+    if loaded.ray_test(ray):
+        return "shadow"
+    if angle is None:
+        return "lit"
+    return "beam" if angle <= light.get("beam", 0.75 * light.get("cutoff", 20.0)) else "falloff"
 
 
 def write_exr_half(mi, path, rgb):
