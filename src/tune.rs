@@ -148,9 +148,12 @@ pub(crate) fn tune_device(
             let median = |kind: RayKind, renderer: &mut Renderer| -> Result<f64> {
                 let mut frame = || -> Result<f64> {
                     Ok(match kind {
-                        RayKind::Primary => renderer.render(&camera, &shade, false)?.1.trace_ms,
                         RayKind::Diffuse => {
                             renderer.trace_rays(&rays, f32::INFINITY, false)?.1.trace_ms
+                        }
+                        // Tuning measures primary and diffuse rays only.
+                        RayKind::Primary | RayKind::Path => {
+                            renderer.render(&camera, &shade, false)?.1.trace_ms
                         }
                     })
                 };

@@ -337,6 +337,131 @@ fn bench_writes_a_table_csv_and_json_with_a_row_per_method() {
     assert!(same, "the JSON holds {json_rows:?}, the CSV {csv_rows:?}");
 }
 
+/// `--rays path` on the sphere: a row per method naming its samples per pixel and path
+/// length, with positive speeds. Its rays (the JSON's) are more than its samples (each
+/// sample's camera ray, and the bounces of those that hit the sphere) and at most two a
+/// segment of each, its Msamples/s are the pixels x spp over its median time, and the
+/// table's two speeds keep the ratio of rays to samples.
+#[test]
+fn bench_path_rows_count_samples_and_every_ray() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = tiny_scene(dir.path());
+    let json_path = dir.path().join("bench.json");
+    let device = test_device();
+    let (spp, bounces, segments) = (2u64, 3u64, 5u64);
+    let mut cmd = cltrace();
+    cmd.arg("bench")
+        .arg(&scene)
+        .args(["--methods", "cpu-bvh,cl-bvh", "--layouts", "bin32"])
+        .args(["--rays", "path", "--resolutions", "16x12"])
+        .args(["--path-spp", &spp.to_string()])
+        .args(["--path-bounces", &bounces.to_string()])
+        .args(["--warmup", "1", "--repetitions", "3"])
+        .args(["--devices", &device.index()])
+        .arg("--json")
+        .arg(&json_path);
+    let out: Output = run(cmd);
+    succeeded(&out);
+    let samples = 16 * 12 * spp;
+
+    let stdout = text(&out.stdout);
+    let (header, rows) = markdown_rows(&stdout);
+    let column = |name: &str| {
+        header
+            .iter()
+            .position(|h| h == name)
+            .unwrap_or_else(|| panic!("no {name} column in\n{stdout}"))
+    };
+    let (kind, mrays, msamples) = (column("rays"), column("Mrays/s"), column("Msamples/s"));
+    assert_eq!(rows.len(), 2, "{stdout}");
+    for row in &rows {
+        assert_eq!(row.len(), header.len(), "{stdout}");
+        assert_eq!(row[kind], "path (2 spp, 5 segments)", "{stdout}");
+        let number = |i: usize| -> f64 { row[i].parse().unwrap_or_else(|_| panic!("{stdout}")) };
+        assert!(number(msamples) > 0.0, "{stdout}");
+        assert!(
+            number(mrays) >= number(msamples),
+            "fewer rays than samples:\n{stdout}"
+        );
+    }
+
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
+    let json_rows = json.as_array().expect("a JSON array of rows");
+    let methods: Vec<&str> = json_rows
+        .iter()
+        .map(|r| r["method"].as_str().unwrap())
+        .collect();
+    assert_eq!(methods, ["cpu-bvh", "cl-bvh:bin32"]);
+    for r in json_rows {
+        assert_eq!(r["ray_kind"], "path", "{r}");
+        assert_eq!(r["spp"], spp, "{r}");
+        assert_eq!(r["segments"], segments, "{r}");
+        let rays = r["rays"].as_u64().expect("a ray count");
+        assert!(rays > samples, "{rays} rays for {samples} samples: {r}");
+        assert!(rays <= 2 * segments * samples, "{rays} rays: {r}");
+        let ms = r["kernel_ms_median"].as_f64().unwrap();
+        let (mrays, msamples) = (
+            r["mrays_per_s"].as_f64().unwrap(),
+            r["msamples_per_s"].as_f64().unwrap(),
+        );
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
+        assert!(close(msamples, samples as f64 / ms / 1e3), "{r}");
+        assert!(close(mrays / msamples, rays as f64 / samples as f64), "{r}");
+    }
+}
+
+/// Path settings out of range, or no whole numbers, are refused before anything runs:
+/// exit 2 and one error line naming the flag (clap's pointer to `--help` aside).
+#[test]
+fn bench_refuses_bad_path_settings_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = tiny_scene(dir.path());
+    for (flag, value, needle) in [
+        (
+            "--path-spp",
+            "0",
+            "--path-spp 0 is out of range: use 1 to 65536",
+        ),
+        ("--path-spp", "65537", "--path-spp 65537 is out of range"),
+        (
+            "--path-bounces",
+            "1025",
+            "--path-bounces 1025 is out of range: use 0 to 1024",
+        ),
+        ("--path-spp", "-3", "-3 is negative"),
+        ("--path-bounces", "two", "`two` is not a number"),
+    ] {
+        let mut cmd = cltrace();
+        cmd.arg("bench")
+            .arg(&scene)
+            .args([
+                "--methods",
+                "cpu-bvh",
+                "--rays",
+                "path",
+                "--resolutions",
+                "8x6",
+            ])
+            // `--flag=-3`: a separate `-3` would be taken for a flag.
+            .arg(format!("{flag}={value}"));
+        let out = run(cmd);
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{flag} {value}: {stderr}");
+        assert_eq!(text(&out.stdout), "", "{flag} {value}: stdout");
+        let lines: Vec<&str> = stderr.lines().collect();
+        assert!(
+            lines[0].starts_with("error: ") && lines[0].contains(needle),
+            "{flag} {value}: {stderr:?}"
+        );
+        let clap_note = |l: &&str| l.is_empty() || *l == "For more information, try '--help'.";
+        assert!(
+            lines[1..].iter().all(clap_note),
+            "{flag} {value}: not one line: {stderr:?}"
+        );
+    }
+}
+
 /// `cltrace tune` (one repetition, the test device) writes a cache naming a layout and a
 /// work-group for the device, and a render pointed at that cache takes its layout.
 #[test]

@@ -27,6 +27,7 @@ use crate::input::scene::SceneMeshes;
 use crate::input::scene_file::MeshSource;
 use crate::material::Materials;
 use crate::mesh::Mesh;
+use crate::render::integrator::{Accumulation, Lighting, SampleSettings};
 use crate::render::{Method, Shade, ShadeParams};
 use crate::renderer::{PrepareOptions, Renderer};
 use crate::report::{Progress, Timings, Verbosity};
@@ -41,17 +42,28 @@ pub enum RayKind {
     /// by 1e-4 of the scene radius along the normal turned to the eye) in a cosine-weighted
     /// direction about that normal: the incoherent case.
     Diffuse,
+    /// Progressive path tracing of the bench view at `--path-spp` samples per pixel and
+    /// `--path-bounces` bounces: every segment counted, shadow rays included.
+    Path,
 }
 
 impl RayKind {
     /// Every kind, in the order the tables list them.
-    pub const ALL: [RayKind; 2] = [RayKind::Primary, RayKind::Diffuse];
+    pub const ALL: [RayKind; 3] = [RayKind::Primary, RayKind::Diffuse, RayKind::Path];
+
+    /// The kinds measured when `--rays` is not given. Path tracing is left out: a frame of
+    /// it is 16 samples a pixel of up to 10 segments each, shadow rays besides (the room of
+    /// scenes/materials.toml: 240 rays a pixel), so that in the default matrix (two
+    /// resolutions, every method, layout and device) it would take many times as long as
+    /// the other kinds together on a CPU device.
+    pub const DEFAULT: [RayKind; 2] = [RayKind::Primary, RayKind::Diffuse];
 
     /// The kind's name: on the command line (`--rays`) and in the tables' `ray_kind` column.
     pub fn name(self) -> &'static str {
         match self {
             RayKind::Primary => "primary",
             RayKind::Diffuse => "diffuse",
+            RayKind::Path => "path",
         }
     }
 
@@ -63,6 +75,11 @@ impl RayKind {
                 "For each pixel whose primary ray hit, one closest-hit ray from the hit point \
                  (offset by 1e-4 of the scene radius along the normal turned to the eye) in a \
                  cosine-weighted direction about that normal: the incoherent case"
+            }
+            RayKind::Path => {
+                "Path tracing of the same view with the scene's materials, --path-spp samples \
+                 a pixel, --path-bounces bounces: Msamples/s and Mrays/s over every segment, \
+                 shadow rays included"
             }
         }
     }
@@ -143,6 +160,11 @@ pub struct BenchRequest {
     pub devices: Option<Vec<String>>,
     /// Kinds of rays to trace at each resolution.
     pub ray_kinds: Vec<RayKind>,
+    /// Samples per pixel of a path frame ([`RayKind::Path`]).
+    pub path_spp: u32,
+    /// Bounces after the first hit of a path frame: `path_bounces + 2` segments, as
+    /// Mitsuba 3's `max_depth` counts them.
+    pub path_bounces: u32,
     /// Image sizes (width, height in pixels), each framed automatically.
     pub resolutions: Vec<(u32, u32)>,
     /// Untimed frames before the timed ones.
@@ -169,7 +191,13 @@ pub(crate) struct BenchRow {
     pub(crate) device: String,
     pub(crate) compute_units: u32,
     pub(crate) ray_kind: String,
+    /// Rays of one frame; for path tracing every segment and shadow ray the renderer
+    /// counted (the mean over the timed frames).
     pub(crate) rays: u64,
+    /// Samples per pixel and path length in segments (camera ray to the last bounce's), of
+    /// the path rows.
+    pub(crate) spp: Option<u32>,
+    pub(crate) segments: Option<u32>,
     pub(crate) load_ms: f64,
     /// BVH build time, for the BVH methods.
     pub(crate) build_ms: Option<f64>,
@@ -181,6 +209,8 @@ pub(crate) struct BenchRow {
     pub(crate) wall_ms_median: Option<f64>,
     /// Rays per second of kernel time (median), in millions.
     pub(crate) mrays_per_s: Option<f64>,
+    /// Path rows: samples (pixels x spp) per second of sampling time (median), in millions.
+    pub(crate) msamples_per_s: Option<f64>,
     pub(crate) sah_cost: Option<f64>,
     /// Scene data the tracer reads (triangles, nodes), MB.
     pub(crate) device_mb: f64,
@@ -210,6 +240,7 @@ pub(crate) fn run(req: &BenchRequest) -> Result<(Vec<BenchRow>, bool)> {
     if req.repetitions == 0 {
         return Err(Error::Invalid("--repetitions must be at least 1".into()));
     }
+    check_path(req)?;
     for &(w, h) in &req.resolutions {
         crate::camera::check_settings(&crate::camera::CameraSettings {
             width: Some(w),
@@ -263,7 +294,9 @@ fn run_into(
     for scene in scenes {
         bar.set_message(format!("loading {}", scene.name));
         let start = Instant::now();
-        let mesh = scene.source.load()?;
+        // The materials are the path rows' alone: the other kinds trace grey geometry.
+        let loaded = scene.source.load_with_materials()?;
+        let (mesh, materials) = (loaded.file.mesh, loaded.file.materials);
         let load_ms = start.elapsed().as_secs_f64() * 1e3;
         crate::interrupt::check()?;
         let mut diffuse = std::collections::HashMap::new();
@@ -290,6 +323,8 @@ fn run_into(
                     device_name(device)
                 ));
                 for layout in layouts_for(req, method) {
+                    let traces = req.ray_kinds.iter().any(|&k| k != RayKind::Path);
+                    let paths = req.ray_kinds.contains(&RayKind::Path);
                     let mut timings = Timings::default();
                     let options = PrepareOptions {
                         build: req.build,
@@ -303,31 +338,68 @@ fn run_into(
                         two_sided_lights: false,
                         lights: Default::default(),
                     };
-                    let mut renderer = Renderer::prepare(
-                        method,
-                        &mesh,
-                        &Materials::default(),
-                        &options,
-                        device,
-                        &mut timings,
-                    )?;
+                    let mut renderer = traces
+                        .then(|| {
+                            Renderer::prepare(
+                                method,
+                                &mesh,
+                                &Materials::default(),
+                                &options,
+                                device,
+                                &mut timings,
+                            )
+                        })
+                        .transpose()?;
+                    // Path tracing renders as `render --shade path` does: the scene's
+                    // materials, smooth normals, the progressive kernels; emitters lit
+                    // from their front face only, as the protocol compares renderers.
+                    let mut path_timings = Timings::default();
+                    let path_options = PrepareOptions {
+                        sampling: true,
+                        crease_angle: None,
+                        ..options
+                    };
+                    let mut path_renderer = paths
+                        .then(|| {
+                            Renderer::prepare(
+                                method,
+                                &mesh,
+                                &materials,
+                                &path_options,
+                                device,
+                                &mut path_timings,
+                            )
+                        })
+                        .transpose()?;
                     for &(width, height) in &req.resolutions {
                         for &kind in &req.ray_kinds {
                             crate::interrupt::check()?;
-                            let row = measure(
+                            let run = Run {
                                 req,
                                 scene,
-                                &mesh,
+                                mesh: &mesh,
                                 load_ms,
                                 method,
                                 layout,
                                 device,
-                                &timings,
-                                &mut renderer,
-                                (width, height),
-                                diffuse.get(&(width, height)).map(Vec::as_slice),
-                                kind,
-                            )?;
+                                size: (width, height),
+                            };
+                            let batch =
+                                || diffuse.get(&(width, height)).map_or(&[][..], Vec::as_slice);
+                            let row = match (kind, &mut renderer, &mut path_renderer) {
+                                (RayKind::Primary, Some(renderer), _) => {
+                                    measure(&run, &timings, renderer, None)?
+                                }
+                                (RayKind::Diffuse, Some(renderer), _) => {
+                                    measure(&run, &timings, renderer, Some(batch()))?
+                                }
+                                (RayKind::Path, _, Some(renderer)) => {
+                                    measure_path(&run, &path_timings, renderer)?
+                                }
+                                _ => {
+                                    unreachable!("a renderer is prepared for every kind asked for")
+                                }
+                            };
                             if req.verbosity >= Verbosity::Verbose {
                                 bar.suspend(|| {
                                     crate::report::print_message(&table::row_line(&row))
@@ -354,88 +426,118 @@ fn layouts_for(req: &BenchRequest, method: Method) -> Vec<Layout> {
     }
 }
 
-#[allow(clippy::too_many_arguments)]
-fn measure(
-    req: &BenchRequest,
-    scene: &BenchScene,
-    mesh: &Mesh,
+/// What one run measures: a scene at one size through one method, layout and device.
+struct Run<'a> {
+    req: &'a BenchRequest,
+    scene: &'a BenchScene,
+    mesh: &'a Mesh,
     load_ms: f64,
     method: Method,
     layout: Layout,
-    device: Option<&ClDevice>,
-    timings: &Timings,
-    renderer: &mut Renderer,
-    (width, height): (u32, u32),
-    diffuse: Option<&[Ray]>,
-    kind: RayKind,
-) -> Result<BenchRow> {
-    let camera = Camera::bench(&mesh.bounds(), width, height)?;
-    let shade = ShadeParams::new(Shade::Lambert, &camera, &mesh.bounds());
-    let diffuse = diffuse.unwrap_or_default();
-    let rays = match kind {
-        RayKind::Primary => width as u64 * height as u64,
-        RayKind::Diffuse => diffuse.len() as u64,
-    };
-    // One timed frame of this run: its trace (kernel) time.
-    let frame = |renderer: &mut Renderer| -> Result<f64> {
-        Ok(match kind {
-            RayKind::Primary => renderer.render(&camera, &shade, false)?.1.trace_ms,
-            RayKind::Diffuse => {
-                renderer
-                    .trace_rays(diffuse, f32::INFINITY, false)?
-                    .1
-                    .trace_ms
-            }
-        })
-    };
-    let mut row = BenchRow {
-        scene: scene.name.clone(),
-        triangles: mesh.triangle_count(),
-        width,
-        height,
-        method: if method == Method::ClBvh {
-            format!("{}:{}", method.name(), layout.name())
-        } else {
-            method.name().to_string()
-        },
-        device: device_name(device),
-        compute_units: device.map_or_else(
-            || rayon::current_num_threads() as u32,
-            |d| d.info.compute_units,
-        ),
-        ray_kind: kind.name().to_string(),
-        rays,
-        load_ms,
-        build_ms: timings.get("build"),
-        build_threads: method.uses_bvh().then(rayon::current_num_threads),
-        kernel_ms_median: None,
-        kernel_ms_min: None,
-        wall_ms_median: None,
-        mrays_per_s: None,
-        sah_cost: renderer.bvh.map(|s| s.sah_cost),
-        device_mb: renderer.scene_bytes as f64 / 1e6,
-        skipped: None,
-    };
-    if matches!(method, Method::CpuBrute | Method::ClBrute) {
-        let frames = (req.warmup + req.repetitions) as f64;
-        // Sampling may stop once a frame surely takes longer than the budget allows.
-        let growth = Growth::new(req.brute_budget_s / frames);
-        let triangles = mesh.triangle_count();
-        let per_frame = match kind {
-            RayKind::Primary => brute_estimate_s(renderer, &camera, &shade, triangles, growth)?,
-            RayKind::Diffuse => brute_rays_estimate_s(renderer, diffuse, triangles, growth)?,
+    device: Option<&'a ClDevice>,
+    /// Width and height in pixels.
+    size: (u32, u32),
+}
+
+impl Run<'_> {
+    /// The row of this run, nothing measured yet.
+    fn row(&self, kind: RayKind, rays: u64, timings: &Timings, renderer: &Renderer) -> BenchRow {
+        let (method, layout, device) = (self.method, self.layout, self.device);
+        BenchRow {
+            scene: self.scene.name.clone(),
+            triangles: self.mesh.triangle_count(),
+            width: self.size.0,
+            height: self.size.1,
+            method: if method == Method::ClBvh {
+                format!("{}:{}", method.name(), layout.name())
+            } else {
+                method.name().to_string()
+            },
+            device: device_name(device),
+            compute_units: device.map_or_else(
+                || rayon::current_num_threads() as u32,
+                |d| d.info.compute_units,
+            ),
+            ray_kind: kind.name().to_string(),
+            rays,
+            spp: None,
+            segments: None,
+            load_ms: self.load_ms,
+            build_ms: timings.get("build"),
+            build_threads: method.uses_bvh().then(rayon::current_num_threads),
+            kernel_ms_median: None,
+            kernel_ms_min: None,
+            wall_ms_median: None,
+            mrays_per_s: None,
+            msamples_per_s: None,
+            sah_cost: renderer.bvh.map(|s| s.sah_cost),
+            device_mb: renderer.scene_bytes as f64 / 1e6,
+            skipped: None,
+        }
+    }
+
+    /// Whether the run is a brute force, whose frames are estimated before they are run.
+    fn brute(&self) -> bool {
+        matches!(self.method, Method::CpuBrute | Method::ClBrute)
+    }
+
+    /// Why a brute-force run whose frames take `per_frame` each is skipped; `None` if they
+    /// fit the budget.
+    fn over_budget(&self, per_frame: Estimate) -> Option<String> {
+        let req = self.req;
+        let estimate_s = per_frame.seconds() * (req.warmup + req.repetitions) as f64;
+        let how = match per_frame {
+            Estimate::About(_) => "estimated",
+            Estimate::AtLeast(_) => "at least",
         };
-        let estimate_s = per_frame.seconds() * frames;
-        if estimate_s > req.brute_budget_s {
-            let how = match per_frame {
-                Estimate::About(_) => "estimated",
-                Estimate::AtLeast(_) => "at least",
-            };
-            row.skipped = Some(format!(
+        (estimate_s > req.brute_budget_s).then(|| {
+            format!(
                 "{how} {estimate_s:.0} s for {} frames > {} s budget",
                 req.warmup + req.repetitions,
                 req.brute_budget_s
-            ));
+            )
+        })
+    }
+
+    /// The brute-force estimates' sampling, which may stop once a frame surely takes
+    /// longer than the budget allows.
+    fn growth(&self) -> Growth {
+        Growth::new(self.req.brute_budget_s / (self.req.warmup + self.req.repetitions) as f64)
+    }
+}
+
+/// A primary run (`diffuse` is `None`) or a diffuse one (its batch of rays): the warm-up,
+/// then the timed frames.
+fn measure(
+    run: &Run,
+    timings: &Timings,
+    renderer: &mut Renderer,
+    diffuse: Option<&[Ray]>,
+) -> Result<BenchRow> {
+    let (req, mesh) = (run.req, run.mesh);
+    let (width, height) = run.size;
+    let camera = Camera::bench(&mesh.bounds(), width, height)?;
+    let shade = ShadeParams::new(Shade::Lambert, &camera, &mesh.bounds());
+    let (kind, rays) = match diffuse {
+        Some(batch) => (RayKind::Diffuse, batch.len() as u64),
+        None => (RayKind::Primary, width as u64 * height as u64),
+    };
+    // One timed frame of this run: its trace (kernel) time.
+    let frame = |renderer: &mut Renderer| -> Result<f64> {
+        Ok(match diffuse {
+            Some(batch) => renderer.trace_rays(batch, f32::INFINITY, false)?.1.trace_ms,
+            None => renderer.render(&camera, &shade, false)?.1.trace_ms,
+        })
+    };
+    let mut row = run.row(kind, rays, timings, renderer);
+    if run.brute() {
+        let triangles = mesh.triangle_count();
+        let per_frame = match diffuse {
+            Some(batch) => brute_rays_estimate_s(renderer, batch, triangles, run.growth())?,
+            None => brute_estimate_s(renderer, &camera, &shade, triangles, run.growth())?,
+        };
+        if let Some(why) = run.over_budget(per_frame) {
+            row.skipped = Some(why);
             return Ok(row);
         }
     }
@@ -459,6 +561,158 @@ fn measure(
     row.wall_ms_median = Some(median(&mut wall));
     row.mrays_per_s = Some(rays as f64 / median_kernel / 1e3);
     Ok(row)
+}
+
+/// The most samples per pixel and bounces a path row takes: as `render --spp` and
+/// `--max-bounces` accept.
+pub(crate) const MAX_PATH_SPP: u32 = 65536;
+pub(crate) const MAX_PATH_BOUNCES: u32 = 1024;
+
+/// Refuses path settings out of range, named by their flags, before anything is measured.
+fn check_path(req: &BenchRequest) -> Result<()> {
+    if !(1..=MAX_PATH_SPP).contains(&req.path_spp) {
+        return Err(Error::Invalid(format!(
+            "--path-spp {} is out of range: use 1 to {MAX_PATH_SPP}",
+            req.path_spp
+        )));
+    }
+    if req.path_bounces > MAX_PATH_BOUNCES {
+        return Err(Error::Invalid(format!(
+            "--path-bounces {} is out of range: use 0 to {MAX_PATH_BOUNCES}",
+            req.path_bounces
+        )));
+    }
+    Ok(())
+}
+
+/// The sampling of a path row, as `render --shade path` sets it up for the same scene:
+/// secondary rays offset by 1e-4 of the scene radius, seed 0 (so every frame, on every
+/// machine, draws the same numbers and traces the same paths).
+fn path_settings(req: &BenchRequest, mesh: &Mesh) -> SampleSettings {
+    let radius = (mesh.bounds().extent().length() * 0.5).max(f32::MIN_POSITIVE);
+    SampleSettings {
+        lighting: Lighting::Path {
+            max_bounces: req.path_bounces,
+        },
+        offset: 1e-4 * radius,
+        seed: 0,
+    }
+}
+
+/// Samples `0..spp` of every pixel of `camera`'s image into a fresh accumulation: the
+/// sampling time (device time for OpenCL, wall time for the host) and the rays the renderer
+/// counted. An interruption (Ctrl-C) is an error: a frame cut short measures nothing.
+fn path_frame(
+    renderer: &mut Renderer,
+    camera: &Camera,
+    settings: &SampleSettings,
+    spp: u32,
+) -> Result<(f64, u64)> {
+    let mut acc = Accumulation::new(camera.width, camera.height);
+    let times = renderer.render_samples(
+        camera,
+        settings,
+        0..spp,
+        &mut acc,
+        crate::interrupt::flag(),
+        false,
+    )?;
+    crate::interrupt::check()?;
+    Ok((times.trace_ms, acc.rays))
+}
+
+/// A path run: a frame is every sample of every pixel, with the scene's materials
+/// (`renderer` is prepared for sampling). Samples/s are pixels x spp over the median
+/// sampling time; Mrays/s count every segment and shadow ray the renderer traced, the
+/// camera rays included.
+fn measure_path(run: &Run, timings: &Timings, renderer: &mut Renderer) -> Result<BenchRow> {
+    let (req, mesh) = (run.req, run.mesh);
+    let (width, height) = run.size;
+    let camera = Camera::bench(&mesh.bounds(), width, height)?;
+    let settings = path_settings(req, mesh);
+    let samples = width as u64 * height as u64 * req.path_spp as u64;
+    let mut row = run.row(RayKind::Path, 0, timings, renderer);
+    row.spp = Some(req.path_spp);
+    // The camera's segment, one per bounce, and the last bounce's sampled direction traced
+    // for the emitter it may hit: Mitsuba 3's max_depth.
+    row.segments = Some(req.path_bounces + 2);
+    if run.brute() {
+        let per_frame = brute_path_estimate_s(
+            renderer,
+            &camera,
+            &settings,
+            req.path_spp,
+            mesh.triangle_count(),
+            run.growth(),
+        )?;
+        if let Some(why) = run.over_budget(per_frame) {
+            row.skipped = Some(why);
+            return Ok(row);
+        }
+    }
+    for _ in 0..req.warmup {
+        path_frame(renderer, &camera, &settings, req.path_spp)?;
+    }
+    let mut kernel = Vec::new();
+    let mut wall = Vec::new();
+    let mut rays = 0u64;
+    for _ in 0..req.repetitions {
+        let start = Instant::now();
+        let (ms, traced) = path_frame(renderer, &camera, &settings, req.path_spp)?;
+        wall.push(start.elapsed().as_secs_f64() * 1e3);
+        kernel.push(ms);
+        rays += traced;
+    }
+    // Every frame draws the same numbers, so the frames trace the same rays (up to the
+    // device's rounding): their mean is the frame's.
+    row.rays = rays / req.repetitions as u64;
+    let median_kernel = median(&mut kernel);
+    row.kernel_ms_median = Some(median_kernel);
+    row.kernel_ms_min = kernel.iter().copied().reduce(f64::min);
+    row.wall_ms_median = Some(median(&mut wall));
+    row.mrays_per_s = Some(row.rays as f64 / median_kernel / 1e3);
+    row.msamples_per_s = Some(samples as f64 / median_kernel / 1e3);
+    Ok(row)
+}
+
+/// A thumbnail of `camera`'s view with about `pixels` pixels, its aspect kept.
+fn thumbnail(camera: &Camera, pixels: u64) -> Camera {
+    let scale = (pixels as f64 / (camera.width as f64 * camera.height as f64)).sqrt();
+    Camera {
+        width: ((camera.width as f64 * scale).ceil() as u32).clamp(1, camera.width),
+        height: ((camera.height as f64 * scale).ceil() as u32).clamp(1, camera.height),
+        ..*camera
+    }
+}
+
+/// [`brute_estimate_s`] for a path frame: one sample of growing thumbnails, scaled to
+/// every sample of the image; one sample of the whole image, if it comes to that, is
+/// scaled by the samples per pixel.
+fn brute_path_estimate_s(
+    renderer: &mut Renderer,
+    camera: &Camera,
+    settings: &SampleSettings,
+    spp: u32,
+    triangles: usize,
+    mut growth: Growth,
+) -> Result<Estimate> {
+    let pixels = camera.width as u64 * camera.height as u64;
+    let total = pixels * spp as u64;
+    // Untimed first launch, as in brute_estimate_s.
+    path_frame(renderer, &thumbnail(camera, 1), settings, 1)?;
+    let mut n = ((1u64 << 24) / triangles.max(1) as u64).clamp(16, pixels.max(16));
+    loop {
+        let probe = thumbnail(camera, n.min(pixels));
+        let (ms, _) = path_frame(renderer, &probe, settings, 1)?;
+        let probed = probe.width as u64 * probe.height as u64;
+        if let Some(estimate) = growth.estimate(probed, total, ms) {
+            return Ok(estimate);
+        }
+        if probed >= pixels {
+            return Ok(Estimate::About(ms / 1e3 * spp as f64));
+        }
+        n = (n * 8).min(pixels);
+    }
 }
 
 /// Seconds one brute-force frame of `camera` will take, from thumbnails of the same view:
@@ -486,12 +740,7 @@ fn brute_estimate_s(
     renderer.render(&one_pixel, shade, false)?;
     let mut pixels = ((1u64 << 24) / triangles as u64).clamp(16, rays);
     loop {
-        let scale = (pixels as f64 / rays as f64).sqrt();
-        let probe = Camera {
-            width: ((camera.width as f64 * scale).ceil() as u32).clamp(1, camera.width),
-            height: ((camera.height as f64 * scale).ceil() as u32).clamp(1, camera.height),
-            ..*camera
-        };
+        let probe = thumbnail(camera, pixels);
         let (_, t) = renderer.render(&probe, shade, false)?;
         let probed = probe.width as u64 * probe.height as u64;
         if let Some(estimate) = growth.estimate(probed, rays, t.trace_ms) {

@@ -6,7 +6,7 @@ use super::BenchRow;
 use crate::error::{Error, Result};
 use crate::output::write_atomically;
 
-const HEADER: [&str; 15] = [
+const HEADER: [&str; 16] = [
     "scene",
     "triangles",
     "resolution",
@@ -20,6 +20,7 @@ const HEADER: [&str; 15] = [
     "kernel ms (median)",
     "kernel ms (min)",
     "Mrays/s",
+    "Msamples/s",
     "SAH cost",
     "device MB",
 ];
@@ -34,14 +35,25 @@ fn num(v: Option<f64>) -> String {
     }
 }
 
-fn cells(r: &BenchRow) -> [String; 15] {
-    let (median, min, mrays) = match &r.skipped {
-        Some(why) => (format!("skipped: {why}"), "-".into(), "-".into()),
+fn cells(r: &BenchRow) -> [String; 16] {
+    let (median, min, mrays, msamples) = match &r.skipped {
+        Some(why) => (
+            format!("skipped: {why}"),
+            "-".into(),
+            "-".into(),
+            "-".into(),
+        ),
         None => (
             num(r.kernel_ms_median),
             num(r.kernel_ms_min),
             num(r.mrays_per_s),
+            num(r.msamples_per_s),
         ),
+    };
+    // A path row names its samples per pixel and path length, which its speeds depend on.
+    let kind = match (r.spp, r.segments) {
+        (Some(spp), Some(segments)) => format!("{} ({spp} spp, {segments} segments)", r.ray_kind),
+        _ => r.ray_kind.clone(),
     };
     [
         r.scene.clone(),
@@ -50,13 +62,14 @@ fn cells(r: &BenchRow) -> [String; 15] {
         r.method.clone(),
         r.device.clone(),
         r.compute_units.to_string(),
-        r.ray_kind.clone(),
+        kind,
         num(Some(r.load_ms)),
         num(r.build_ms),
         r.build_threads.map_or("-".into(), |t| t.to_string()),
         median,
         min,
         mrays,
+        msamples,
         r.sah_cost.map_or("-".into(), |c| format!("{c:.2}")),
         format!("{:.1}", r.device_mb),
     ]

@@ -14,21 +14,34 @@ use cltrace::report::Verbosity;
 use super::build::BuildArgs;
 use super::values::{all_names, choice, device_list, parse_resolution, whole_number};
 
-/// Every method, every layout, every ray kind: the defaults of the lists.
+/// Every method, every layout, and the ray kinds but path tracing: the defaults of the
+/// lists.
 static METHODS: LazyLock<String> = LazyLock::new(all_names::<Method>);
 static LAYOUTS: LazyLock<String> = LazyLock::new(all_names::<Layout>);
-static RAY_KINDS: LazyLock<String> = LazyLock::new(all_names::<RayKind>);
+static RAY_KINDS: LazyLock<String> = LazyLock::new(|| {
+    RayKind::DEFAULT
+        .iter()
+        .map(|k| k.name())
+        .collect::<Vec<_>>()
+        .join(",")
+});
 
 pub const EXAMPLES: &str = "\
 Examples:
   cltrace bench                                   the built-in scene, every method and device
   cltrace bench --scenes ../shared/scenes --csv results.csv
   cltrace bench bunny.obj --methods cl-bvh --devices gpu --resolutions 1920x1080
+  cltrace bench scenes/materials.toml --rays path --path-spp 64 --methods cl-bvh
 
 Each run: auto framing, one warm-up frame, then --repetitions frames; kernel time is the
 device's (OpenCL profiling events) or the trace's wall time (CPU methods). Mrays/s use the
 median. Brute-force runs whose frames (warm-up and repetitions together) are estimated to
-take more than --brute-budget seconds are listed as skipped, with the estimate.";
+take more than --brute-budget seconds are listed as skipped, with the estimate.
+
+`--rays path` adds path-tracing rows: a frame is --path-spp samples of every pixel with the
+scene's materials, paths of --path-bounces bounces (that plus 2 segments, as Mitsuba 3's
+max_depth counts them); Msamples/s are pixels x spp over the median sampling time, Mrays/s
+count every segment and shadow ray traced (the CSV and JSON `rays` of a frame).";
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -61,7 +74,7 @@ pub struct BenchArgs {
     #[arg(long, default_value = "all")]
     devices: String,
 
-    /// Ray kinds to measure, comma-separated
+    /// Ray kinds to measure, comma-separated (path tracing only when named)
     #[arg(
         long,
         value_parser = choice::<RayKind>(),
@@ -69,6 +82,14 @@ pub struct BenchArgs {
         default_value = RAY_KINDS.as_str()
     )]
     rays: Vec<RayKind>,
+
+    /// Samples per pixel of a path-tracing frame (`--rays path`), 1 to 65536
+    #[arg(value_parser = whole_number, long, value_name = "N", default_value_t = 16)]
+    path_spp: u32,
+
+    /// Bounces of the path tracer (`--rays path`), 0 to 1024; paths are 2 segments longer
+    #[arg(value_parser = whole_number, long, value_name = "N", default_value_t = 8)]
+    path_bounces: u32,
 
     /// Resolutions, comma-separated `WxH`
     #[arg(long, value_delimiter = ',', value_parser = parse_resolution, default_value = "1920x1080,512x512")]
@@ -126,6 +147,8 @@ impl BenchArgs {
                 layouts: self.layouts,
                 devices: device_list(&self.devices),
                 ray_kinds: self.rays,
+                path_spp: self.path_spp,
+                path_bounces: self.path_bounces,
                 resolutions: self.resolutions,
                 warmup: self.warmup,
                 repetitions: self.repetitions,
