@@ -297,7 +297,6 @@ fn thin_dielectric_pane_regions_match_mitsuba() {
 /// degrees about +y, intensity 1.25) with a sun of 2 x 2 texels: the floor, the spheres and
 /// the map seen directly.
 #[test]
-#[ignore = "needs the lights of issue 17"]
 fn environment_map_regions_match_mitsuba() {
     regions_match_mitsuba("env");
 }
@@ -305,14 +304,12 @@ fn environment_map_regions_match_mitsuba() {
 /// The diffuse sphere under a constant environment colour: the background seen directly is
 /// its colour times its intensity exactly.
 #[test]
-#[ignore = "needs the lights of issue 17"]
 fn constant_environment_regions_match_mitsuba() {
     regions_match_mitsuba("background");
 }
 
 /// A point light: the floor lit and in the sphere's hard shadow.
 #[test]
-#[ignore = "needs the lights of issue 17"]
 fn point_light_regions_match_mitsuba() {
     regions_match_mitsuba("point");
 }
@@ -320,14 +317,12 @@ fn point_light_regions_match_mitsuba() {
 /// A spot light at an angle: the floor in its full beam, in the falloff band, outside the
 /// cone and in the sphere's shadow.
 #[test]
-#[ignore = "needs the lights of issue 17"]
 fn spot_light_regions_match_mitsuba() {
     regions_match_mitsuba("spot");
 }
 
 /// A directional light at an angle: the floor lit and in the sphere's hard shadow.
 #[test]
-#[ignore = "needs the lights of issue 17"]
 fn directional_light_regions_match_mitsuba() {
     regions_match_mitsuba("directional");
 }
