@@ -1,7 +1,8 @@
 #!/bin/sh
 # Renders the README's gallery (docs/gallery/*.png) from the models in ../shared/scenes/
 # (see its SOURCES.md): smooth against faceted, a textured model, a glTF model, depth of
-# field. Rerun it after a change that alters how things look:
+# field, the scattering models, and a sun and sky. Rerun it after a change that alters how
+# things look:
 #
 #   sh scripts/gallery.sh [SCENES_DIR] [OUT_DIR]
 #
@@ -32,4 +33,38 @@ render "$scenes/suzanne_gltf/Suzanne.gltf" $path -o "$out/suzanne-gltf.png"
 # Depth of field: a lens 0.2 wide focused on Spot's face; the body behind it blurs.
 render "$scenes/spot.obj.gz" $path $front --aperture 0.2 --focus-on -0.35,0.3,-0.5 \
     -o "$out/spot-depth-of-field.png"
+# Glass, gold, plastic, a mirror and a pane: scenes/materials.toml, cropped to 3:2.
+render "$here/scenes/materials.toml" -o "$out/materials.png"
+# Lit by a sun and sky alone: a gold dragon (the sun's direction given), and a plastic
+# bunny on a June evening in Munich (the sun's place in the sky from place and time).
+tmp="$(mktemp -d)"
+trap 'rm -rf "$tmp"' EXIT
+cat > "$tmp/dragon.toml" <<END
+[[mesh]]
+file = "$scenes/stanford_dragon.obj.gz"
+material = { bsdf = "conductor", metal = "gold", roughness = 0.25 }
+[ground]
+albedo = [0.45, 0.45, 0.45]
+[sky]
+sun_direction = [-0.6, 0.55, 0.6]
+turbidity = 3.0
+[render]
+max_bounces = 8
+END
+render "$tmp/dragon.toml" $path -o "$out/dragon-sun-and-sky.png"
+cat > "$tmp/bunny.toml" <<END
+[[mesh]]
+file = "$scenes/stanford_bunny.obj"
+material = { bsdf = "plastic", albedo = [0.75, 0.72, 0.68], roughness = 0.3 }
+[ground]
+albedo = [0.45, 0.45, 0.45]
+[sky]
+latitude = 48.14
+longitude = 11.58
+time = "2026-06-21T19:45:00+02:00"
+turbidity = 4.0
+[render]
+max_bounces = 8
+END
+render "$tmp/bunny.toml" $path -o "$out/bunny-evening-sky.png"
 ls -l "$out"

@@ -877,3 +877,77 @@ fn every_light_path_traces_on_the_device_as_on_the_host() {
         }
     });
 }
+
+/// Issue 17's "the same image on every device": PoCL, the Intel runtime and a GPU (each
+/// device found) render one converged image of every kind of surface and light, and each
+/// equals the first device's within [`agree_up_to_noise`]'s bounds (the same seeds, so the
+/// images differ only where a device's sin, cos or rounding sent a path elsewhere).
+#[test]
+fn every_device_renders_the_same_converged_image() {
+    use cltrace::material::Bsdf;
+    let (mut mesh, mut materials) =
+        open_floor(Material::with_bsdf(Bsdf::Plastic, [0.2, 0.4, 0.8], 0.3));
+    let mut glass = generate(Generator::Sphere { subdivisions: 2 });
+    for p in &mut glass.positions {
+        *p = *p * 0.25 + Vec3::new(0.5, -0.75, 0.1);
+    }
+    mesh.append(&glass);
+    materials
+        .list
+        .push(Material::with_bsdf(Bsdf::Dielectric, [1.0; 3], 0.0));
+    materials
+        .per_triangle
+        .extend(std::iter::repeat_n(2, glass.triangle_count()));
+    let lights = Lights {
+        environment: Some(small_map(1.0, 20.0)),
+        punctual: vec![Punctual::Spot {
+            position: Vec3::new(-0.5, 1.0, 0.8),
+            direction: Vec3::new(0.4, -1.0, -0.6).normalize(),
+            intensity: Vec3::splat(2.0),
+            cutoff: 30f32.to_radians(),
+            beam: 15f32.to_radians(),
+        }],
+    };
+    let options = PrepareOptions {
+        lights: std::sync::Arc::new(lights),
+        ..prepare(Layout::default(), false)
+    };
+    let cam = camera(&mesh, [0.0, 0.2, 1.2], [0.0, -0.6, -0.2], 60.0, (32, 24));
+    let lighting = Lighting::Path { max_bounces: 6 };
+    let run = |device: Option<&ClDevice>, method, seed| {
+        accumulate_with(
+            method,
+            options.clone(),
+            device,
+            (&mesh, &materials),
+            &cam,
+            lighting,
+            256,
+            seed,
+        )
+        .radiance()
+    };
+    let other = run(None, Method::CpuBvh, 8);
+    let images: Vec<(String, Vec<[f32; 3]>)> = devices()
+        .iter()
+        .map(|d| (d.info.name.clone(), run(Some(d), Method::ClBvh, 7)))
+        .collect();
+    let (first, reference) = &images[0];
+    for (name, image) in &images[1..] {
+        agree_up_to_noise(
+            &format!("{name} against {first}"),
+            reference,
+            image,
+            Some(&other),
+            0.01,
+        );
+    }
+    // And the host's, which every device's kernels mirror.
+    agree_up_to_noise(
+        first,
+        &run(None, Method::CpuBvh, 7),
+        reference,
+        Some(&other),
+        0.01,
+    );
+}
