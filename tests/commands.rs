@@ -510,3 +510,49 @@ fn tune_writes_a_cache_that_render_then_reads() {
     );
     assert_eq!(render_sah(dir.path(), &device, Some(&cache), &[]), expected);
 }
+
+/// The path rows looked at the Cornell box from behind its back wall: the benchmark's
+/// straight-on view, where no path enters the box. They take the scene file's camera
+/// (and lights): from inside a closed cube every path bounces on (about 5 rays a sample
+/// at 3 bounces with a point light), where from the outside one bounce escapes (at most 3).
+#[test]
+fn bench_path_rows_looked_at_the_box_from_outside_instead_of_through_the_scene_camera() {
+    let dir = tempfile::tempdir().unwrap();
+    let rays_per_sample = |camera: &str| {
+        let scene = dir.path().join("cube.toml");
+        std::fs::write(
+            &scene,
+            format!(
+                "[[mesh]]\ngenerator = {{ kind = \"cube\" }}\nscale = 2.0\n{camera}\n\
+                 [[light]]\ntype = \"point\"\nposition = [0.5, 0.5, 0.5]\n"
+            ),
+        )
+        .unwrap();
+        let json_path = dir.path().join("bench.json");
+        let mut cmd = cltrace();
+        cmd.arg("bench")
+            .arg(&scene)
+            .args([
+                "--methods",
+                "cpu-bvh",
+                "--rays",
+                "path",
+                "--resolutions",
+                "16x12",
+            ])
+            .args(["--path-spp", "2", "--path-bounces", "3", "--warmup", "0"])
+            .args(["--repetitions", "1", "--json"])
+            .arg(&json_path);
+        succeeded(&run(cmd));
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
+        json[0]["rays"].as_u64().unwrap() as f64 / (16.0 * 12.0 * 2.0)
+    };
+    let inside = rays_per_sample("[camera]\neye = [0.0, 0.0, 0.0]\nlook_at = [0.0, 0.0, -1.0]");
+    let outside = rays_per_sample("");
+    assert!(inside > 4.5, "from inside the cube: {inside} rays a sample");
+    assert!(
+        outside < 3.5,
+        "the benchmark's view: {outside} rays a sample"
+    );
+}

@@ -17,12 +17,13 @@ use serde::Serialize;
 use crate::bvh::Bin32Bvh;
 use crate::bvh::Layout;
 use crate::bvh::{BuildOptions, Bvh};
-use crate::camera::Camera;
+use crate::camera::{Camera, CameraSettings, View};
 use crate::device::{ClDevice, DeviceSelector, list_devices};
 use crate::error::{Error, Result};
 use crate::geometry::Ray;
 use crate::input::MeshFormat;
 use crate::input::generate::Generator;
+use crate::input::lights::LightsDescription;
 use crate::input::scene::SceneMeshes;
 use crate::input::scene_file::MeshSource;
 use crate::material::Materials;
@@ -218,10 +219,24 @@ pub(crate) struct BenchRow {
     pub(crate) skipped: Option<String>,
 }
 
-/// A scene to measure: its source and name.
+/// A scene to measure: its source and name, and for path rows a scene file's camera (the
+/// benchmark's view fills in what it leaves open) and lights.
 struct BenchScene {
     source: SceneMeshes,
     name: String,
+    camera: CameraSettings,
+    lights: LightsDescription,
+}
+
+impl BenchScene {
+    fn of(source: SceneMeshes, name: String) -> Self {
+        BenchScene {
+            source,
+            name,
+            camera: CameraSettings::default(),
+            lights: LightsDescription::default(),
+        }
+    }
 }
 
 /// Where a method runs: the host, or an OpenCL device.
@@ -297,6 +312,11 @@ fn run_into(
         // The materials are the path rows' alone: the other kinds trace grey geometry.
         let loaded = scene.source.load_with_materials()?;
         let (mesh, materials) = (loaded.file.mesh, loaded.file.materials);
+        // And its lights, for the path rows.
+        let lights = match req.ray_kinds.contains(&RayKind::Path) {
+            true => std::sync::Arc::new(scene.lights.load()?),
+            false => Default::default(),
+        };
         let load_ms = start.elapsed().as_secs_f64() * 1e3;
         crate::interrupt::check()?;
         let mut diffuse = std::collections::HashMap::new();
@@ -357,7 +377,8 @@ fn run_into(
                     let path_options = PrepareOptions {
                         sampling: true,
                         crease_angle: None,
-                        ..options
+                        lights: lights.clone(),
+                        ..options.clone()
                     };
                     let mut path_renderer = paths
                         .then(|| {
@@ -628,7 +649,17 @@ fn path_frame(
 fn measure_path(run: &Run, timings: &Timings, renderer: &mut Renderer) -> Result<BenchRow> {
     let (req, mesh) = (run.req, run.mesh);
     let (width, height) = run.size;
-    let camera = Camera::bench(&mesh.bounds(), width, height)?;
+    // The scene file's camera, the benchmark's view filling in what it leaves open: the
+    // protocol's view of the Cornell box is from behind its back wall, where no path enters.
+    let camera = Camera::from_settings(
+        &CameraSettings {
+            view: Some(run.scene.camera.view.unwrap_or(View::Bench)),
+            width: Some(width),
+            height: Some(height),
+            ..run.scene.camera
+        },
+        &mesh.bounds(),
+    )?;
     let settings = path_settings(req, mesh);
     let samples = width as u64 * height as u64 * req.path_spp as u64;
     let mut row = run.row(RayKind::Path, 0, timings, renderer);
@@ -862,16 +893,18 @@ fn scenes(req: &BenchRequest) -> Result<Vec<BenchScene>> {
         generated.push(Generator::default_scene());
     }
     for g in generated {
-        scenes.push(BenchScene {
-            name: g.name(),
-            source: MeshSource::Generator(g).into(),
-        });
+        scenes.push(BenchScene::of(
+            MeshSource::Generator(g.clone()).into(),
+            g.name(),
+        ));
     }
     for path in &req.scenes {
         let description = crate::input::scene_file::SceneDescription::named(Some(path))?;
         scenes.push(BenchScene {
             name: description.meshes.name(),
             source: description.meshes,
+            camera: description.camera,
+            lights: description.lights,
         });
     }
     for folder in &req.scene_folders {
@@ -887,10 +920,11 @@ fn scenes(req: &BenchRequest) -> Result<Vec<BenchScene>> {
                 "holds no .obj, .obj.gz, .ply, .ply.gz, .gltf or .glb mesh",
             ));
         }
-        scenes.extend(found.into_iter().map(|p| BenchScene {
-            name: file_name(&p),
-            source: MeshSource::File(p).into(),
-        }));
+        scenes.extend(
+            found
+                .into_iter()
+                .map(|p| BenchScene::of(MeshSource::File(p.clone()).into(), file_name(&p))),
+        );
     }
     Ok(scenes)
 }

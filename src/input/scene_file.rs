@@ -26,6 +26,27 @@
 //! two_sided_lights = false     # emitters shine from their front face only (default)
 //! ```
 //!
+//! Lights besides emitting materials, for `shade = "path"` ([`super::lights`]; the
+//! default sky goes once any is given):
+//!
+//! ```toml
+//! [environment]                # light from infinity: a map or one colour, not both
+//! file = "sky.hdr"             # equirectangular, Mitsuba's orientation; or color = [r, g, b]
+//! intensity = 1.0
+//! rotate = 0.0                 # degrees about +y
+//!
+//! [sky]                        # instead of [environment]: a sun and sky (Preetham)
+//! sun_direction = [1.0, 1.0, 0.0]   # or latitude, longitude and time (RFC 3339)
+//! turbidity = 3.0              # 1.7 to 10; intensity and rotate as above
+//!
+//! [[light]]
+//! type = "spot"                # point, spot or directional
+//! position = [0.0, 2.0, 0.0]   # point, spot
+//! direction = [0.0, -1.0, 0.0] # spot: its axis; directional: where its light goes
+//! intensity = 10.0             # point, spot: W/sr (or [r, g, b]); directional: irradiance
+//! cutoff = 20.0                # spot: degrees; beam = 15.0, full within it
+//! ```
+//!
 //! The camera may be animated, for `cltrace render --frames` ([`crate::animation`]), by
 //! keyframes or by a turntable, not both:
 //!
