@@ -9,7 +9,8 @@
     __global const float* env_conditional, uint env_width, uint env_height, float2 env_rotation
 #define ENV env_texels, env_marginal, env_conditional, env_width, env_height, env_rotation
 
-/* The index whose interval of the cumulative distribution cdf[0..n) holds u. */
+/* The index whose interval of the cumulative distribution cdf[0..n) holds u (also how
+ * light samples pick an emitter, cl/integrator.cl). */
 FORCE_INLINE uint cdf_find(__global const float* cdf, uint n, float u) {
     uint lo = 0, hi = n - 1;
     while (lo < hi) {

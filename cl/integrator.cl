@@ -121,16 +121,6 @@ __kernel void sample_shadow(SAMPLE_PARAMS) {
     add_sample(accum, rays, accum_pitch, x - col0, y - row0, radiance, count);
 }
 
-/* The emitter whose CDF interval holds u. */
-FORCE_INLINE uint pick_emitter(__global const float* cdf, uint count, float u) {
-    uint lo = 0, hi = count - 1;
-    while (lo < hi) {
-        uint mid = (lo + hi) / 2;
-        if (u < cdf[mid]) hi = mid; else lo = mid + 1;
-    }
-    return lo;
-}
-
 /* The radiance an emitter e sends from its point with barycentrics (w0, w1, 1 - w0 - w1):
  * its material's emission, times its emission texture there (full resolution). */
 FORCE_INLINE float3 emitted(SURFACE_PARAMS, const __global Triangle* e, float w0, float w1) {
@@ -233,7 +223,7 @@ __kernel void sample_path(SAMPLE_PARAMS) {
         uint d = bounce_dim(bounce);
         bool lit = lambert || !shading_all_delta(&sh);
         if (emitter_count > 0 && lit) {
-            const __global Triangle* e = &tris[emitters[pick_emitter(emitter_cdf, emitter_count, sample_1d(key, d))]];
+            const __global Triangle* e = &tris[emitters[cdf_find(emitter_cdf, emitter_count, sample_1d(key, d))]];
             float u1 = sample_1d(key, d + 1), u2 = sample_1d(key, d + 2);
             float3 q = triangle_point(load3(e->v0), load3(e->v1), load3(e->v2), u1, u2);
             float3 w = q - origin;

@@ -7,6 +7,8 @@ use cltrace::material::{Bsdf, CONDUCTORS, Material};
 use cltrace::render::bsdf::Shading;
 use glam::Vec3;
 
+use crate::common::{chi_square_fails, uniform};
+
 /// The models to check, each with a name: every [`Bsdf`], smooth and rough, and glTF's
 /// metal blend.
 fn models() -> Vec<(String, Shading)> {
@@ -61,15 +63,6 @@ fn views() -> [Vec3; 3] {
     ]
 }
 
-/// A small counter-based generator for the tests' uniform numbers.
-fn uniform(i: u64, dim: u64) -> f32 {
-    let mut x = i.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ dim.wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    x ^= x >> 31;
-    x = x.wrapping_mul(0x94d0_49bb_1331_11eb);
-    x ^= x >> 29;
-    (x >> 40) as f32 / (1u64 << 24) as f32
-}
-
 const THETA_BINS: usize = 10;
 const PHI_BINS: usize = 20;
 
@@ -110,14 +103,6 @@ fn integrate(model: &Shading, wo: Vec3, theta: (f64, f64), phi: (f64, f64)) -> f
         }
         last = next;
     }
-}
-
-/// The chi-square statistic's quantile at upper-tail probability 1e-4 (z = 3.719), by
-/// Wilson and Hilferty's approximation.
-fn chi_square_limit(dof: f64) -> f64 {
-    let z = 3.719;
-    let a = 2.0 / (9.0 * dof);
-    dof * (1.0 - a + z * a.sqrt()).powi(3)
 }
 
 /// Sampling draws its directions as its density says: histograms of 200,000 samples per
@@ -167,30 +152,8 @@ fn every_bsdf_samples_directions_as_its_density_says() {
                         integrate(&model, wo, (z1.acos(), z0.acos()), (p0, p1)) * N as f64;
                 }
             }
-            // Pool the bins that expect few samples.
-            let (mut chi2, mut dof, mut pool_o, mut pool_e) = (0.0, 0usize, 0.0, 0.0);
-            for (o, e) in observed.iter().zip(&expected) {
-                if *e < 5.0 {
-                    pool_o += o;
-                    pool_e += e;
-                } else {
-                    chi2 += (o - e) * (o - e) / e;
-                    dof += 1;
-                }
-            }
-            if pool_e >= 5.0 {
-                chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
-                dof += 1;
-            } else if pool_o > 20.0 {
-                failures.push(format!(
-                    "{name}, view {v}: {pool_o} samples where the density expects {pool_e:.1}"
-                ));
-            }
-            let limit = chi_square_limit(dof.saturating_sub(1).max(1) as f64);
-            if chi2 > limit {
-                failures.push(format!(
-                    "{name}, view {v}: chi-square {chi2:.1} over {dof} bins, limit {limit:.1}"
-                ));
+            if let Some(why) = chi_square_fails(&observed, &expected) {
+                failures.push(format!("{name}, view {v}: {why}"));
             }
         }
     }

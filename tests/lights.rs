@@ -11,15 +11,7 @@ use cltrace::light::sky::Sky;
 use glam::Vec3;
 
 use crate::common::command::{cltrace, run, text};
-
-/// A small counter-based generator for the tests' uniform numbers.
-fn uniform(i: u64, dim: u64) -> f32 {
-    let mut x = i.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ dim.wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    x ^= x >> 31;
-    x = x.wrapping_mul(0x94d0_49bb_1331_11eb);
-    x ^= x >> 29;
-    (x >> 40) as f32 / (1u64 << 24) as f32
-}
+use crate::common::{chi_square_fails, uniform};
 
 const Y_BINS: usize = 16;
 const PHI_BINS: usize = 32;
@@ -71,13 +63,6 @@ fn bin_probabilities(env: &Environment) -> Vec<f64> {
         }
     }
     out
-}
-
-/// The chi-square statistic's quantile at upper-tail probability 1e-4 (z = 3.719), by
-/// Wilson and Hilferty's approximation.
-fn chi_square_limit(dof: f64) -> f64 {
-    let a = 2.0 / (9.0 * dof);
-    dof * (1.0 - a + 3.719 * a.sqrt()).powi(3)
 }
 
 /// Test maps: a gradient with a bright texel and a black band (which no sample may reach),
@@ -148,30 +133,9 @@ fn environment_maps_sample_directions_as_their_density_says() {
         if (total - 1.0).abs() > 1e-4 {
             failures.push(format!("{name}: the density integrates to {total}"));
         }
-        let (mut chi2, mut dof, mut pool_o, mut pool_e) = (0.0, 0usize, 0.0, 0.0);
-        for (o, p) in observed.iter().zip(&probabilities) {
-            let e = p * N as f64;
-            if e < 5.0 {
-                pool_o += o;
-                pool_e += e;
-            } else {
-                chi2 += (o - e) * (o - e) / e;
-                dof += 1;
-            }
-        }
-        if pool_e >= 5.0 {
-            chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
-            dof += 1;
-        } else if pool_o > 20.0 {
-            failures.push(format!(
-                "{name}: {pool_o} samples where the density expects {pool_e:.1}"
-            ));
-        }
-        let limit = chi_square_limit(dof.saturating_sub(1).max(1) as f64);
-        if chi2 > limit {
-            failures.push(format!(
-                "{name}: chi-square {chi2:.1} over {dof} bins, limit {limit:.1}"
-            ));
+        let expected: Vec<f64> = probabilities.iter().map(|p| p * N as f64).collect();
+        if let Some(why) = chi_square_fails(&observed, &expected) {
+            failures.push(format!("{name}: {why}"));
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));

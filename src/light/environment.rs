@@ -62,8 +62,9 @@ fn cdf(weights: &[f64]) -> Vec<f32> {
     out
 }
 
-/// The index whose CDF interval holds `u` (as the kernel's `cdf_find`).
-fn cdf_find(cdf: &[f32], u: f32) -> usize {
+/// The index whose CDF interval holds `u` (the kernels' `cdf_find`): also how light
+/// samples pick an emitter.
+pub(crate) fn cdf_find(cdf: &[f32], u: f32) -> usize {
     let (mut lo, mut hi) = (0usize, cdf.len() - 1);
     while lo < hi {
         let mid = (lo + hi) / 2;

@@ -184,16 +184,7 @@ impl Emitters {
 
     /// The emitter whose CDF interval holds `u` (binary search, as the kernel does).
     pub(crate) fn pick(&self, u: f32) -> usize {
-        let (mut lo, mut hi) = (0usize, self.cdf.len() - 1);
-        while lo < hi {
-            let mid = (lo + hi) / 2;
-            if u < self.cdf[mid] {
-                hi = mid;
-            } else {
-                lo = mid + 1;
-            }
-        }
-        lo
+        crate::light::environment::cdf_find(&self.cdf, u)
     }
 }
 

@@ -404,3 +404,41 @@ pub fn test_scenes() -> Vec<(String, Mesh)> {
     }
     scenes
 }
+
+/// A small counter-based generator of uniform numbers in [0, 1) for the sampling tests.
+pub fn uniform(i: u64, dim: u64) -> f32 {
+    let mut x = i.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ dim.wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x ^= x >> 31;
+    x = x.wrapping_mul(0x94d0_49bb_1331_11eb);
+    x ^= x >> 29;
+    (x >> 40) as f32 / (1u64 << 24) as f32
+}
+
+/// The chi-square test of goodness of fit of sample counts against expected counts, as
+/// Mitsuba's test suite runs it: bins expecting fewer than 5 are pooled into one, and the
+/// statistic is held to its quantile at upper-tail probability 1e-4 (z = 3.719, by Wilson
+/// and Hilferty's approximation). `None` if it passes, else why not.
+pub fn chi_square_fails(observed: &[f64], expected: &[f64]) -> Option<String> {
+    let (mut chi2, mut dof, mut pool_o, mut pool_e) = (0.0, 0usize, 0.0, 0.0);
+    for (o, e) in observed.iter().zip(expected) {
+        if *e < 5.0 {
+            pool_o += o;
+            pool_e += e;
+        } else {
+            chi2 += (o - e) * (o - e) / e;
+            dof += 1;
+        }
+    }
+    if pool_e >= 5.0 {
+        chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
+        dof += 1;
+    } else if pool_o > 20.0 {
+        return Some(format!(
+            "{pool_o} samples where the density expects {pool_e:.1}"
+        ));
+    }
+    let k = dof.saturating_sub(1).max(1) as f64;
+    let a = 2.0 / (9.0 * k);
+    let limit = k * (1.0 - a + 3.719 * a.sqrt()).powi(3);
+    (chi2 > limit).then(|| format!("chi-square {chi2:.1} over {dof} bins, limit {limit:.1}"))
+}
