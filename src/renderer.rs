@@ -92,12 +92,16 @@ impl<'d> Renderer<'d> {
         timings: &mut Timings,
     ) -> Result<Self> {
         let built = Self::build(method, mesh, materials, options, timings);
-        Self::prepare_built(method, mesh, materials, options, built, device, timings)
+        let surface = Self::surface(mesh, materials, options, timings);
+        Self::prepare_built(
+            method, mesh, materials, options, built, surface, device, timings,
+        )
     }
 
-    /// [`Renderer::prepare`] for each of several devices, the BVH built once: the
-    /// renderers of one frame split over devices ([`schedule`]). `options[i]` is for
-    /// `devices[i]`.
+    /// [`Renderer::prepare`] for each of several devices, the BVH and the surface data
+    /// made once and the devices prepared at once, each on its own thread: the renderers of
+    /// one frame split over devices ([`schedule`]). `options[i]` is for `devices[i]`. The
+    /// devices' stages are timed as the slowest device's.
     pub(crate) fn prepare_each(
         method: Method,
         mesh: &Mesh,
@@ -107,22 +111,65 @@ impl<'d> Renderer<'d> {
         timings: &mut Timings,
     ) -> Result<Vec<Self>> {
         let built = Self::build(method, mesh, materials, &options[0], timings);
-        devices
+        let surface = Self::surface(mesh, materials, &options[0], timings);
+        let prepared: Vec<(Result<Self>, Timings)> = std::thread::scope(|s| {
+            let threads: Vec<_> = devices
+                .iter()
+                .zip(options)
+                .map(|(&device, options)| {
+                    let (built, surface) = (built.clone(), surface.clone());
+                    s.spawn(move || {
+                        let mut own = Timings::default();
+                        let renderer = Self::prepare_built(
+                            method,
+                            mesh,
+                            materials,
+                            options,
+                            built,
+                            surface,
+                            Some(device),
+                            &mut own,
+                        );
+                        (renderer, own)
+                    })
+                })
+                .collect();
+            threads
+                .into_iter()
+                .map(|t| t.join().expect("preparing a device does not panic"))
+                .collect()
+        });
+        let slowest = prepared
             .iter()
-            .zip(options)
-            .map(|(device, options)| {
-                let built = built.clone();
-                Self::prepare_built(
-                    method,
-                    mesh,
-                    materials,
-                    options,
-                    built,
-                    Some(device),
-                    timings,
-                )
-            })
-            .collect()
+            .map(|(_, t)| t)
+            .max_by(|a, b| a.total_ms().total_cmp(&b.total_ms()));
+        for (stage, ms) in slowest.into_iter().flat_map(|t| t.stages()) {
+            timings.add(stage, ms);
+        }
+        prepared.into_iter().map(|(r, _)| r).collect()
+    }
+
+    /// The surface data the kernels shade with: smooth normals where the mesh has none
+    /// (stage "surface").
+    fn surface(
+        mesh: &Mesh,
+        materials: &Materials,
+        options: &PrepareOptions,
+        timings: &mut Timings,
+    ) -> Surface {
+        timings.time("surface", || {
+            let crease = options.crease_angle.unwrap_or(DEFAULT_CREASE_ANGLE);
+            let mut smooth;
+            let mesh = match crease > 0.0 {
+                true => {
+                    smooth = mesh.clone();
+                    smooth.fill_normals(crease);
+                    &smooth
+                }
+                false => mesh,
+            };
+            Surface::new(mesh, materials)
+        })
     }
 
     /// The BVH in the thesis's layout, with its statistics, for the BVH methods.
@@ -149,29 +196,18 @@ impl<'d> Renderer<'d> {
         Some((flat, stats))
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn prepare_built(
         method: Method,
         mesh: &Mesh,
         materials: &Materials,
         options: &PrepareOptions,
         built: Option<(Bin32Bvh, BvhStats)>,
+        surface: Surface,
         device: Option<&'d ClDevice>,
         timings: &mut Timings,
     ) -> Result<Self> {
         let sampling = options.sampling;
-        let surface = timings.time("surface", || {
-            let crease = options.crease_angle.unwrap_or(DEFAULT_CREASE_ANGLE);
-            let mut smooth;
-            let mesh = match crease > 0.0 {
-                true => {
-                    smooth = mesh.clone();
-                    smooth.fill_normals(crease);
-                    &smooth
-                }
-                false => mesh,
-            };
-            Surface::new(mesh, materials)
-        });
         let features = SurfaceFeatures {
             environment: options.lights.environment.is_some(),
             punctual: !options.lights.punctual.is_empty(),
@@ -407,11 +443,11 @@ impl<'d> Renderer<'d> {
         }
     }
 
-    /// A session's sums, read back.
+    /// A session's sums of the rows its units touched, read back; `None` if it took none.
     pub(crate) fn finish_samples(
         &mut self,
         session: crate::device::tracer::SampleSession,
-    ) -> Result<Accumulation> {
+    ) -> Result<Option<Accumulation>> {
         match &mut self.tracer {
             Tracer::Cl(t) => t.finish_samples(session),
             _ => unreachable!("only the OpenCL tracer starts sessions"),

@@ -223,6 +223,11 @@ impl Timings {
         }
     }
 
+    /// The stages' times together, ms.
+    pub(crate) fn total_ms(&self) -> f64 {
+        self.stages.iter().map(|&(_, ms)| ms).sum()
+    }
+
     pub(crate) fn get(&self, stage: &str) -> Option<f64> {
         self.stages
             .iter()

@@ -62,22 +62,32 @@ impl<T: OclPrm> PitchedBuffer<T> {
     /// Reads the first `rows` rows into `out`, tightly packed (`width` elements a row),
     /// skipping the padding. Blocks until done (ocl's reads block by default).
     pub(crate) fn read_rows(&self, device: &ClDevice, rows: usize, out: &mut [T]) -> Result<()> {
+        self.read_row_range(device, 0..rows, out)
+    }
+
+    /// Reads the rows `rows` into `out`, tightly packed, as [`PitchedBuffer::read_rows`].
+    pub(crate) fn read_row_range(
+        &self,
+        device: &ClDevice,
+        rows: std::ops::Range<usize>,
+        out: &mut [T],
+    ) -> Result<()> {
         assert!(
-            rows <= self.height && out.len() >= rows * self.width,
+            rows.end <= self.height && out.len() >= rows.len() * self.width,
             "read_rows out of bounds"
         );
-        if rows == 0 {
+        if rows.is_empty() {
             return Ok(());
         }
         let size = size_of::<T>();
         self.buffer
             .cmd()
             .queue(&device.queue)
-            .read(&mut out[..rows * self.width])
+            .read(&mut out[..rows.len() * self.width])
             .rect(
+                [0, rows.start, 0],
                 [0, 0, 0],
-                [0, 0, 0],
-                [self.width, rows, 1],
+                [self.width, rows.len(), 1],
                 self.pitch * size,
                 0,
                 self.width * size,

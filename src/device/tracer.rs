@@ -217,6 +217,10 @@ pub(crate) struct SampleSession {
     setup: SampleSetup,
     width: u32,
     region: Region,
+    /// The region's rows whose sums have been cleared, which are the rows a unit touched:
+    /// rows are cleared when first touched and only those are read back, so a device that
+    /// takes one small unit of a frame pays for that unit, not for the whole frame.
+    cleared: Vec<bool>,
 }
 
 /// The values of `SampleParams` that stay the same from launch to launch.
@@ -957,13 +961,12 @@ impl<'d> ClTracer<'d> {
         let mut setup = self.sample_setup(camera, settings, width, region, h)?;
         // The accumulation image's row 0 is the region's first row.
         setup.band.row0 = region.y0;
-        let device = self.device;
-        clear_sums(device, &setup.accum, &setup.rays)?;
-        self.scene.clear_status(device)?;
+        self.scene.clear_status(self.device)?;
         Ok(Some(SampleSession {
             setup,
             width,
             region,
+            cleared: vec![false; h],
         }))
     }
 
@@ -978,6 +981,21 @@ impl<'d> ClTracer<'d> {
         stop: &std::sync::atomic::AtomicBool,
     ) -> Result<f64> {
         let device = self.device;
+        let (y0, pitch) = (session.region.y0, session.setup.accum.pitch);
+        // Clear the runs of rows not touched before.
+        let mut row = rows.start;
+        while row < rows.end {
+            let first = (row - y0) as usize;
+            let run = session.cleared[first..(rows.end - y0) as usize]
+                .iter()
+                .take_while(|&&c| c == session.cleared[first])
+                .count();
+            if !session.cleared[first] {
+                clear_rows(device, &session.setup, pitch, first..first + run)?;
+                session.cleared[first..first + run].fill(true);
+            }
+            row += run as u32;
+        }
         let SampleSetup {
             kernel,
             accum,
@@ -989,47 +1007,86 @@ impl<'d> ClTracer<'d> {
         let x0 = session.region.x0 as usize;
         let w = session.region.width() as usize;
         band.row_end = rows.end;
+        // Launches are queued one ahead of the one waited for, so that the device never
+        // idles while the host (perhaps slowed by a busy CPU device beside it) comes back
+        // to queue the next: arguments set after a launch is queued do not change it.
+        let mut in_flight = std::collections::VecDeque::new();
         let mut ms = 0.0;
         for sample in samples {
             band.set(kernel)
                 .and_then(|()| values.params(sample, accum, rays).set(kernel))
                 .map_err(|e| device.error(&format!("setting the arguments of {name}"), e))?;
             let origin = [x0, rows.start as usize];
-            ms += launch_rect(device, kernel, self.local, origin, [w, rows.len()])?;
-            if stop.load(std::sync::atomic::Ordering::Relaxed) {
-                break;
+            in_flight.push_back(queue_rect(
+                device,
+                kernel,
+                self.local,
+                origin,
+                [w, rows.len()],
+            )?);
+            if in_flight.len() > 1 {
+                ms += wait_ms(device, &in_flight.pop_front().expect("two in flight"))?;
+                if stop.load(std::sync::atomic::Ordering::Relaxed) {
+                    break;
+                }
             }
+        }
+        for event in in_flight {
+            ms += wait_ms(device, &event)?;
         }
         Ok(ms)
     }
 
-    /// The session's sums, read back, and its rays.
-    pub(crate) fn finish_samples(&mut self, session: SampleSession) -> Result<Accumulation> {
+    /// The session's sums of the rows its units touched, read back, and its rays; `None`
+    /// when it took no unit.
+    pub(crate) fn finish_samples(
+        &mut self,
+        session: SampleSession,
+    ) -> Result<Option<Accumulation>> {
         let device = self.device;
-        let (w, h) = (
-            session.region.width() as usize,
-            session.region.height() as usize,
-        );
+        let cleared = &session.cleared;
+        let (Some(first), Some(last)) = (
+            cleared.iter().position(|&c| c),
+            cleared.iter().rposition(|&c| c),
+        ) else {
+            return Ok(None);
+        };
+        let w = session.region.width() as usize;
+        let h = last + 1 - first;
         let setup = &session.setup;
+        let pitch = setup.accum.pitch;
         let mut host = vec![Long4::zero(); w * h];
-        setup.accum.read_rows(device, h, &mut host)?;
-        let mut counts = vec![0u32; setup.accum.pitch * h];
+        setup
+            .accum
+            .read_row_range(device, first..last + 1, &mut host)?;
+        let mut counts = vec![0u32; pitch * h];
         setup
             .rays
+            .cmd()
             .read(&mut counts)
+            .offset(pitch * first)
             .enq()
             .map_err(|e| device.error("reading the ray counts back", e))?;
         self.scene.check_status(device)?;
-        let height = session.region.y1;
-        let mut acc = Accumulation::of_region(session.width, height, session.region);
-        for (o, v) in acc.pixels.iter_mut().zip(&host) {
-            *o = [v[0], v[1], v[2], v[3]];
+        let region = Region {
+            y0: session.region.y0 + first as u32,
+            y1: session.region.y0 + last as u32 + 1,
+            ..session.region
+        };
+        let mut acc = Accumulation::of_region(session.width, region.y1, region);
+        // Rows between touched ones that no unit touched were never cleared: they add nothing.
+        for (y, (out, sums)) in acc.pixels.chunks_mut(w).zip(host.chunks(w)).enumerate() {
+            if cleared[first + y] {
+                for (o, v) in out.iter_mut().zip(sums) {
+                    *o = [v[0], v[1], v[2], v[3]];
+                }
+                acc.rays += counts[y * pitch..y * pitch + w]
+                    .iter()
+                    .map(|&c| c as u64)
+                    .sum::<u64>();
+            }
         }
-        acc.rays = counts
-            .chunks(setup.accum.pitch)
-            .map(|row| row[..w].iter().map(|&c| c as u64).sum::<u64>())
-            .sum();
-        Ok(acc)
+        Ok(Some(acc))
     }
 
     /// Renders one frame. `progress` shows a bar on stderr when the render looks long.
@@ -1298,6 +1355,31 @@ fn clear_sums(
         .map_err(|e| device.error("clearing the ray counts", e))
 }
 
+/// Clears the sums and ray counts of `rows` (rows of the accumulation image).
+fn clear_rows(
+    device: &ClDevice,
+    setup: &SampleSetup,
+    pitch: usize,
+    rows: std::ops::Range<usize>,
+) -> Result<()> {
+    let (offset, len) = (rows.start * pitch, rows.len() * pitch);
+    setup
+        .accum
+        .buffer
+        .cmd()
+        .fill(Long4::zero(), Some(len))
+        .offset(offset)
+        .enq()
+        .map_err(|e| device.error("clearing the accumulation image", e))?;
+    setup
+        .rays
+        .cmd()
+        .fill(0u32, Some(len))
+        .offset(offset)
+        .enq()
+        .map_err(|e| device.error("clearing the ray counts", e))
+}
+
 fn launch_rows(
     device: &ClDevice,
     kernel: &ocl::Kernel,
@@ -1333,16 +1415,47 @@ fn launch_rect(
 }
 
 fn launch(device: &ClDevice, cmd: ocl::builders::KernelCmd) -> Result<f64> {
+    wait_ms(device, &queue_kernel(device, cmd)?)
+}
+
+/// [`launch_rect`] without the wait: the launch's event.
+fn queue_rect(
+    device: &ClDevice,
+    kernel: &ocl::Kernel,
+    local: [usize; 2],
+    origin: [usize; 2],
+    size: [usize; 2],
+) -> Result<ocl::Event> {
+    let global = [
+        size[0].div_ceil(local[0]) * local[0],
+        size[1].div_ceil(local[1]) * local[1],
+    ];
+    queue_kernel(
+        device,
+        kernel
+            .cmd()
+            .global_work_offset(origin)
+            .global_work_size(global)
+            .local_work_size(local),
+    )
+}
+
+fn queue_kernel(device: &ClDevice, cmd: ocl::builders::KernelCmd) -> Result<ocl::Event> {
     let mut event = ocl::Event::empty();
     unsafe {
         cmd.enew(&mut event)
             .enq()
             .map_err(|e| device.error("launching the kernel", e))?;
     }
+    Ok(event)
+}
+
+/// Waits for a launch to end; its device time, ms.
+fn wait_ms(device: &ClDevice, event: &ocl::Event) -> Result<f64> {
     event
         .wait_for()
         .map_err(|e| device.error("running the kernel", e.into()))?;
-    event_ms(&event).map_err(|e| device.error("reading the kernel's profiling times", e))
+    event_ms(event).map_err(|e| device.error("reading the kernel's profiling times", e))
 }
 
 fn upload<T: ocl::OclPrm>(device: &ClDevice, data: &[T], doing: &str) -> Result<ocl::Buffer<T>> {

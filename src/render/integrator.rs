@@ -652,17 +652,24 @@ impl Accumulation {
     /// Adds `part`'s sums, counts and rays (of a region inside this one's) into this
     /// accumulation; `None`, with the sums partly added, if a sum would overflow.
     pub(crate) fn add(&mut self, part: &Accumulation) -> Option<()> {
+        use rayon::prelude::*;
         let (r, p) = (self.region, part.region);
         let w = p.width() as usize;
-        for (row, src) in part.pixels.chunks(w.max(1)).enumerate() {
-            let y = (p.y0 - r.y0) as usize + row;
+        if w > 0 {
             let x = (p.x0 - r.x0) as usize;
-            let dst = &mut self.pixels[y * r.width() as usize + x..][..w];
-            for (d, s) in dst.iter_mut().zip(src) {
-                for c in 0..4 {
-                    d[c] = d[c].checked_add(s[c])?;
-                }
-            }
+            // Row by row on every core: a 4K frame is 33 million sums.
+            self.pixels
+                .par_chunks_mut(r.width() as usize)
+                .skip((p.y0 - r.y0) as usize)
+                .zip(part.pixels.par_chunks(w))
+                .try_for_each(|(row, src)| {
+                    for (d, s) in row[x..x + w].iter_mut().zip(src) {
+                        for c in 0..4 {
+                            d[c] = d[c].checked_add(s[c])?;
+                        }
+                    }
+                    Some(())
+                })?;
         }
         self.rays += part.rays;
         Some(())

@@ -28,16 +28,21 @@ use crate::report::Progress;
 const OVERFLOW: &str = "a frame's sums fit 63 bits";
 /// The longest a unit is meant to take, so that speeds are re-measured and a stop is seen.
 const MAX_UNIT_SECONDS: f64 = 2.0;
+/// A unit is at most this many times the work its device has finished: a speed measured
+/// on a band where rays are cheap (the sky) must not hand the device most of a frame.
+/// Measured: a probe of a band of sky gave Intel's runtime on 2 cores 18 samples of 7/8 of
+/// the frame, 4.2 s of work, while PoCL beside it finished everything else in 1.7 s.
+const GROWTH: f64 = 2.0;
 /// A device slower than this share of all the devices' speed together stops after its
 /// first unit: it would cost the others more than it adds. Measured: a 16-core PoCL device
 /// beside an H200 took 2.3% of a frame's samples and made the H200's own kernels 6% slower.
 const MIN_SHARE: f64 = 0.05;
-/// Bands of rows the region is cut into at least: a device's first unit, one sample of a
-/// band, measures its speed without holding up the frame much. Not more: a GPU waits for
-/// each launch, and a launch over a small band is short enough for the host's latency
-/// (worse with a busy CPU device beside it) to cost (measured: 16 bands cost an H200 14%
-/// beside a 16-core PoCL device).
-const MIN_BANDS: u64 = 4;
+/// Bands of rows the region is cut into at least. A device's first unit, one sample of a
+/// band, measures its speed without holding up the frame much; after it, a unit covers
+/// every neighbouring band as far behind, in one launch a sample, so that a GPU's launches
+/// stay as large as when it renders alone (a launch over a band of a sixteenth of the
+/// frame, waited for one by one, cost an H200 14% beside a 16-core PoCL device).
+const MIN_BANDS: u64 = 16;
 
 /// What one device did for the frame.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
@@ -73,11 +78,34 @@ struct Queue {
     rates: Vec<Option<f64>>,
     /// When each device's unit in flight is expected to end, and its pixel samples.
     in_flight: Vec<Option<(Instant, u64)>>,
+    /// Pixel samples each device has finished.
+    done: Vec<u64>,
     /// Devices that have stopped taking work: the others no longer count on them.
     gone: Vec<bool>,
 }
 
 impl Queue {
+    /// The samples `samples` of `region`, cut into `bands` bands of rows, for `devices`.
+    fn new(region: Region, samples: Range<u32>, bands: u32, devices: usize) -> Self {
+        Queue {
+            bands: (0..bands)
+                .map(|i| Band {
+                    region: Region {
+                        y0: region.y0 + region.height() * i / bands,
+                        y1: region.y0 + region.height() * (i + 1) / bands,
+                        ..region
+                    },
+                    next: samples.start,
+                })
+                .collect(),
+            end: samples.end,
+            rates: vec![None; devices],
+            in_flight: vec![None; devices],
+            done: vec![0; devices],
+            gone: vec![false; devices],
+        }
+    }
+
     fn left(&self) -> u64 {
         self.bands
             .iter()
@@ -85,19 +113,28 @@ impl Queue {
             .sum()
     }
 
-    /// The next unit for device `d`: a band and its samples; `None` when the work is gone
-    /// or when the other devices would finish it all before `d` finished a unit.
-    fn take(&mut self, d: usize, now: Instant) -> Option<(usize, Range<u32>)> {
-        let b = (0..self.bands.len()).max_by_key(|&b| self.end - self.bands[b].next)?;
-        let band = &self.bands[b];
-        let left_in_band = self.end - band.next;
+    /// The next unit for device `d`: a run of neighbouring bands and the samples it takes
+    /// of each; `None` when the work is gone or when the other devices would finish it all
+    /// before `d` finished a unit.
+    fn take(&mut self, d: usize, now: Instant) -> Option<(Range<usize>, Range<u32>)> {
+        // The first of the bands furthest behind.
+        let b = (0..self.bands.len()).min_by_key(|&b| self.bands[b].next)?;
+        let next = self.bands[b].next;
+        let left_in_band = self.end - next;
         if left_in_band == 0 {
             return None;
         }
-        let pixels = band.region.pixels() as f64;
-        let samples = match self.rates[d] {
-            // Not measured yet: one sample of the band measures it.
-            None => 1,
+        // The bands next to `b` that are as far behind, taken together.
+        let mut run = b..b + 1;
+        while run.start > 0 && self.bands[run.start - 1].next == next {
+            run.start -= 1;
+        }
+        while run.end < self.bands.len() && self.bands[run.end].next == next {
+            run.end += 1;
+        }
+        let (run, samples) = match self.rates[d] {
+            // Not measured yet: one sample of a band measures it.
+            None => (b..b + 1, 1),
             Some(rate) => {
                 let left = self.left() as f64;
                 let others: f64 = (0..self.rates.len())
@@ -114,25 +151,44 @@ impl Queue {
                 if rate < MIN_SHARE * total {
                     return None;
                 }
-                let guided = rate * (left / total) / 2.0;
-                let mut n = (guided.min(rate * MAX_UNIT_SECONDS) / pixels)
-                    .floor()
-                    .max(1.0);
+                // Pixel samples: guided self-scheduling, at most a few seconds' work and a
+                // few times the work done, and done before the others finish everything.
+                let mut budget = (rate * (left / total) / 2.0)
+                    .min(rate * MAX_UNIT_SECONDS)
+                    .min(GROWTH * self.done[d] as f64);
                 if others > 0.0 {
-                    // Finish the unit before the others would finish everything left.
-                    let limit = (rate * (left + in_flight) / others / pixels).floor();
-                    if limit < 1.0 {
+                    let limit = rate * (left + in_flight) / others;
+                    if limit < self.bands[b].region.pixels() as f64 {
                         return None;
                     }
-                    n = n.min(limit);
+                    budget = budget.min(limit);
                 }
-                (n as u32).min(left_in_band)
+                let run_pixels: f64 = self.bands[run.clone()]
+                    .iter()
+                    .map(|b| b.region.pixels() as f64)
+                    .sum();
+                match budget >= run_pixels {
+                    true => (run, ((budget / run_pixels) as u32).min(left_in_band)),
+                    // Less than a sample of the run: a sample of as many of its bands as fit.
+                    false => {
+                        let bands = (budget / self.bands[b].region.pixels() as f64) as usize;
+                        (run.start..run.start + bands.clamp(1, run.len()), 1)
+                    }
+                }
             }
         };
-        let band = &mut self.bands[b];
-        let first = band.next;
-        band.next += samples;
-        Some((b, first..first + samples))
+        for band in &mut self.bands[run.clone()] {
+            band.next += samples;
+        }
+        Some((run, next..next + samples))
+    }
+
+    /// The rows of a run of bands, and its pixels.
+    fn rows(&self, run: &Range<usize>) -> Region {
+        Region {
+            y1: self.bands[run.end - 1].region.y1,
+            ..self.bands[run.start].region
+        }
     }
 }
 
@@ -158,22 +214,7 @@ pub(crate) fn render_samples(
         .div_ceil(spp.max(1))
         .max(MIN_BANDS);
     let bands = wanted.clamp(1, region.height() as u64) as u32;
-    let queue = Mutex::new(Queue {
-        bands: (0..bands)
-            .map(|i| Band {
-                region: Region {
-                    y0: region.y0 + region.height() * i / bands,
-                    y1: region.y0 + region.height() * (i + 1) / bands,
-                    ..region
-                },
-                next: samples.start,
-            })
-            .collect(),
-        end: samples.end,
-        rates: vec![None; renderers.len()],
-        in_flight: vec![None; renderers.len()],
-        gone: vec![false; renderers.len()],
-    });
+    let queue = Mutex::new(Queue::new(region, samples.clone(), bands, renderers.len()));
     let total = spp * region.pixels() as u64;
     let bar = Progress::new(
         progress,
@@ -238,12 +279,12 @@ pub(crate) fn render_samples(
                                 share.dropped_from_tail = q.left() > 0;
                             }
                             if let (Some((b, s)), Some(rate)) = (&unit, q.rates[d]) {
-                                let work = s.len() as u64 * q.bands[*b].region.pixels() as u64;
+                                let work = s.len() as u64 * q.rows(b).pixels() as u64;
                                 let secs = work as f64 / rate;
                                 q.in_flight[d] =
                                     Some((now + std::time::Duration::from_secs_f64(secs), work));
                             }
-                            unit.map(|(b, s)| (q.bands[b].region, s))
+                            unit.map(|(b, s)| (q.rows(&b), s))
                         };
                         let Some((band, range)) = unit else { break };
                         let began = Instant::now();
@@ -273,6 +314,7 @@ pub(crate) fn render_samples(
                             // The speed over everything done so far: later units are larger.
                             q.rates[d] =
                                 Some(share.pixel_samples as f64 / (share.busy_ms / 1e3).max(1e-6));
+                            q.done[d] = share.pixel_samples;
                             q.in_flight[d] = None;
                         }
                         let mut done = done.lock().expect("no thread panics holding it");
@@ -286,9 +328,12 @@ pub(crate) fn render_samples(
                             .inspect_err(|_| failed.store(true, Ordering::Relaxed))?;
                         share.busy_ms += began.elapsed().as_secs_f64() * 1e3;
                         // Stopped early, a unit holds fewer samples than it was given.
-                        share.pixel_samples = sums.pixels.iter().map(|p| p[3] as u64).sum();
-                        let mut done = done.lock().expect("no thread panics holding it");
-                        done.1.add(&sums).expect(OVERFLOW);
+                        share.pixel_samples = 0;
+                        if let Some(sums) = sums {
+                            share.pixel_samples = sums.pixels.iter().map(|p| p[3] as u64).sum();
+                            let mut done = done.lock().expect("no thread panics holding it");
+                            done.1.add(&sums).expect(OVERFLOW);
+                        }
                     }
                     Ok(share)
                 })
@@ -323,23 +368,41 @@ mod tests {
     use super::*;
 
     fn queue(devices: usize, height: u32, samples: Range<u32>) -> Queue {
-        Queue {
-            bands: vec![Band {
-                region: Region::whole(100, height),
-                next: samples.start,
-            }],
-            end: samples.end,
-            rates: vec![None; devices],
-            in_flight: vec![None; devices],
-            gone: vec![false; devices],
-        }
+        Queue::new(Region::whole(100, height), samples, 1, devices)
+    }
+
+    #[test]
+    fn a_measured_device_takes_every_band_as_far_behind_in_one_unit() {
+        let mut q = Queue::new(Region::whole(100, 40), 0..100, 4, 2);
+        // The first units: a sample of a band each.
+        assert_eq!(q.take(0, Instant::now()), Some((0..1, 0..1)));
+        assert_eq!(q.take(1, Instant::now()), Some((1..2, 0..1)));
+        // Bands 2 and 3 are the furthest behind; the fast device takes both, several samples.
+        q.rates = vec![Some(1e6), Some(1e3)];
+        q.done = vec![u64::MAX / 4; 2];
+        let (bands, samples) = q.take(0, Instant::now()).unwrap();
+        assert_eq!(bands, 2..4);
+        assert!(samples.start == 0 && samples.len() > 1, "{samples:?}");
+        assert_eq!(
+            q.rows(&bands),
+            Region {
+                y0: 20,
+                ..Region::whole(100, 40)
+            }
+        );
+        // Less than a sample of a run: a sample of fewer of its bands.
+        let mut q = Queue::new(Region::whole(100, 40), 0..100, 4, 2);
+        q.rates = vec![Some(1_000.0), Some(1_000.0)];
+        q.done = vec![u64::MAX / 4; 2];
+        let (bands, samples) = q.take(0, Instant::now()).unwrap();
+        assert_eq!((bands.len(), samples), (2, 0..1));
     }
 
     #[test]
     fn an_unmeasured_device_takes_one_sample() {
         let mut q = queue(2, 10, 0..64);
-        assert_eq!(q.take(0, Instant::now()), Some((0, 0..1)));
-        assert_eq!(q.take(1, Instant::now()), Some((0, 1..2)));
+        assert_eq!(q.take(0, Instant::now()), Some((0..1, 0..1)));
+        assert_eq!(q.take(1, Instant::now()), Some((0..1, 1..2)));
         assert_eq!(q.left(), 62 * 1000);
     }
 
@@ -349,6 +412,7 @@ mod tests {
         q.bands[0].next = 2;
         // 1000 pixels a band: device 0 does 10 samples a second, device 1 one.
         q.rates = vec![Some(10_000.0), Some(1_000.0)];
+        q.done = vec![u64::MAX / 4; 2];
         let now = Instant::now();
         let (_, fast) = q.take(0, now).unwrap();
         let (_, slow) = q.take(1, now).unwrap();
@@ -377,6 +441,19 @@ mod tests {
         assert!(q.take(0, Instant::now()).is_some());
         q.rates = vec![Some(90_000.0), Some(10_000.0)];
         assert!(q.take(1, Instant::now()).is_some(), "10% keeps working");
+    }
+
+    #[test]
+    fn a_unit_is_at_most_twice_the_work_its_device_has_done() {
+        let mut q = queue(2, 10, 0..1000);
+        q.bands[0].next = 2;
+        // A fast speed measured on one cheap sample of 1000 pixels: two samples next, not
+        // the hundreds the speed alone would give.
+        q.rates = vec![Some(1e7), Some(1e3)];
+        q.done = vec![1000, 1000];
+        assert_eq!(q.take(0, Instant::now()), Some((0..1, 2..4)));
+        q.done[0] = 3000;
+        assert_eq!(q.take(0, Instant::now()), Some((0..1, 4..10)));
     }
 
     /// Regression: two devices of about the same speed near the end each left the rest to
