@@ -152,6 +152,11 @@ pub struct RunSummary {
     pub outputs: Vec<PathBuf>,
     /// False when the render was interrupted and the image holds fewer samples.
     pub complete: bool,
+    /// The sampling's wall time, from its start to the sums on the host: the pixel samples
+    /// over it are the speed that several devices' speeds add up to. (With one device the
+    /// `samples` stage is its kernels' time, with the host's share in `launch` and
+    /// `read-back`; with several it is this wall time.)
+    pub sampling_ms: Option<f64>,
     /// With several devices: what each did (samples taken, busy time).
     pub devices: Vec<crate::renderer::schedule::DeviceShare>,
     /// The part written, for `--region` or `--samples`: its region and sample range.
@@ -618,16 +623,18 @@ fn render_with(
             )?,
             _ => {
                 let names: Vec<String> = devices.iter().map(|d| d.info.name.clone()).collect();
-                let shares = crate::renderer::schedule::render_samples(
+                let (sums, shares) = crate::renderer::schedule::render_samples(
                     &mut renderers,
                     &names,
                     &camera,
                     &settings,
+                    (camera.width, camera.height),
+                    region,
                     samples.clone(),
-                    &mut acc,
                     crate::interrupt::flag(),
                     v.progress(),
                 )?;
+                acc = sums;
                 for s in &shares {
                     let dropped = match s.dropped_from_tail {
                         true => ", dropped from the tail",
@@ -649,6 +656,7 @@ fn render_with(
                 }
             }
         };
+        summary.sampling_ms = Some(elapsed_ms(start));
         add_times(&mut timings, "samples", elapsed_ms(start), &times);
         let counts = acc.pixels.iter().map(|p| p[3] as u64);
         let expected = samples.len() as f64;

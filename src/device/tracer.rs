@@ -804,7 +804,13 @@ impl<'d> ClTracer<'d> {
         self.scene.clear_status(device)?;
         let local = self.local;
         let mut times = DeviceTimes::default();
-        let mut host = vec![Long4::zero(); w * capacity];
+        // Made on every core: one thread faulting in the pages of a 4K frame's 265 MB of sums
+        // takes tens of milliseconds.
+        let mut host = Vec::with_capacity(w * capacity);
+        {
+            use rayon::prelude::*;
+            host.par_extend(rayon::iter::repeat_n(Long4::zero(), w * capacity));
+        }
         let mut counts = vec![0u32; pitch * capacity];
         let mut group0 = 0usize;
         'groups: while group0 < h {
@@ -851,18 +857,19 @@ impl<'d> ClTracer<'d> {
                 .enq()
                 .map_err(|e| device.error("reading the ray counts back", e))?;
             times.read_back_ms += start.elapsed().as_secs_f64() * 1e3;
-            for (row, chunk) in host[..w * group_rows].chunks(w).enumerate() {
-                let out = &mut accumulation.pixels[(group0 + row) * w..(group0 + row + 1) * w];
-                for (o, v) in out.iter_mut().zip(chunk) {
-                    for c in 0..4 {
-                        o[c] += v[c];
+            // On every core: a 4K frame's sums are 265 MB.
+            use rayon::prelude::*;
+            accumulation.pixels[group0 * w..(group0 + group_rows) * w]
+                .par_chunks_mut(w)
+                .zip(host.par_chunks(w))
+                .for_each(|(out, sums)| {
+                    for (o, v) in out.iter_mut().zip(sums) {
+                        for c in 0..4 {
+                            o[c] += v[c];
+                        }
                     }
-                }
-                accumulation.rays += counts[row * pitch..row * pitch + w]
-                    .iter()
-                    .map(|&c| c as u64)
-                    .sum::<u64>();
-            }
+                });
+            accumulation.rays += row_sums(&counts, pitch, w, 0..group_rows);
             self.scene.check_status(device)?;
             group0 += group_rows;
             if stopped {
@@ -1055,10 +1062,24 @@ impl<'d> ClTracer<'d> {
         let h = last + 1 - first;
         let setup = &session.setup;
         let pitch = setup.accum.pitch;
-        let mut host = vec![Long4::zero(); w * h];
+        let region = Region {
+            y0: session.region.y0 + first as u32,
+            y1: session.region.y0 + last as u32 + 1,
+            ..session.region
+        };
+        let mut acc = Accumulation::of_region(session.width, region.y1, region);
+        // Straight into the accumulation: no copy of hundreds of megabytes on the host. Its
+        // pages are touched first on every core: a driver's copy would fault them in one
+        // by one.
+        {
+            use rayon::prelude::*;
+            acc.pixels
+                .par_chunks_mut(1 << 14)
+                .for_each(|c| c.fill([0; 4]));
+        }
         setup
             .accum
-            .read_row_range(device, first..last + 1, &mut host)?;
+            .read_row_range(device, first..last + 1, long4s(&mut acc.pixels))?;
         let mut counts = vec![0u32; pitch * h];
         setup
             .rays
@@ -1068,22 +1089,11 @@ impl<'d> ClTracer<'d> {
             .enq()
             .map_err(|e| device.error("reading the ray counts back", e))?;
         self.scene.check_status(device)?;
-        let region = Region {
-            y0: session.region.y0 + first as u32,
-            y1: session.region.y0 + last as u32 + 1,
-            ..session.region
-        };
-        let mut acc = Accumulation::of_region(session.width, region.y1, region);
         // Rows between touched ones that no unit touched were never cleared: they add nothing.
-        for (y, (out, sums)) in acc.pixels.chunks_mut(w).zip(host.chunks(w)).enumerate() {
-            if cleared[first + y] {
-                for (o, v) in out.iter_mut().zip(sums) {
-                    *o = [v[0], v[1], v[2], v[3]];
-                }
-                acc.rays += counts[y * pitch..y * pitch + w]
-                    .iter()
-                    .map(|&c| c as u64)
-                    .sum::<u64>();
+        for (y, out) in acc.pixels.chunks_mut(w).enumerate() {
+            match cleared[first + y] {
+                true => acc.rays += row_sums(&counts, pitch, w, y..y + 1),
+                false => out.fill([0; 4]),
             }
         }
         Ok(Some(acc))
@@ -1353,6 +1363,26 @@ fn clear_sums(
         .fill(0u32, None)
         .enq()
         .map_err(|e| device.error("clearing the ray counts", e))
+}
+
+/// The rays counted in `rows` of a pitched image of counts `width` wide.
+fn row_sums(counts: &[u32], pitch: usize, width: usize, rows: std::ops::Range<usize>) -> u64 {
+    rows.map(|y| {
+        counts[y * pitch..y * pitch + width]
+            .iter()
+            .map(|&c| c as u64)
+            .sum::<u64>()
+    })
+    .sum()
+}
+
+/// Sums as the host keeps them, as the device's `long4`s, to read into.
+fn long4s(pixels: &mut [[i64; 4]]) -> &mut [Long4] {
+    // ocl's Long4 is a newtype of [i64; 4]: same size, no stricter alignment.
+    const _: () = assert!(size_of::<Long4>() == size_of::<[i64; 4]>());
+    const _: () = assert!(align_of::<Long4>() <= align_of::<[i64; 4]>());
+    // SAFETY: as above, and every bit pattern is a valid value of both.
+    unsafe { std::slice::from_raw_parts_mut(pixels.as_mut_ptr().cast::<Long4>(), pixels.len()) }
 }
 
 /// Clears the sums and ray counts of `rows` (rows of the accumulation image).

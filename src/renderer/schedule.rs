@@ -177,6 +177,15 @@ impl Queue {
                 }
             }
         };
+        // Bands ahead of the run are caught up with, not overtaken: bands in step make
+        // runs of the whole region, whose launches are as large as they can be.
+        let ahead = self
+            .bands
+            .iter()
+            .map(|b| b.next)
+            .filter(|&n| n > next)
+            .min();
+        let samples = ahead.map_or(samples, |a| samples.min(a - next));
         for band in &mut self.bands[run.clone()] {
             band.next += samples;
         }
@@ -192,22 +201,21 @@ impl Queue {
     }
 }
 
-/// Adds samples `samples` of every pixel of `accumulation`'s region to it, split over
-/// `renderers` (one per device, all prepared for the same scene). Returns what each
-/// device did. `stop`, once set, ends the work at the next launch of each device.
+/// The sums of samples `samples` of every pixel of `region` (of a `width` x `height`
+/// image), split over `renderers` (one per device, all prepared for the same scene), and
+/// what each device did. `stop`, once set, ends the work at the next launch of each device.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn render_samples(
     renderers: &mut [Renderer],
     names: &[String],
     camera: &Camera,
     settings: &SampleSettings,
+    (width, height): (u32, u32),
+    region: Region,
     samples: Range<u32>,
-    accumulation: &mut Accumulation,
     stop: &AtomicBool,
     progress: bool,
-) -> Result<Vec<DeviceShare>> {
-    let region = accumulation.region;
-    let (width, height) = accumulation.image_size();
+) -> Result<(Accumulation, Vec<DeviceShare>)> {
     let spp = samples.len() as u64;
     // Enough units for every device to get several, even at a few samples per pixel.
     let wanted = (8 * renderers.len() as u64)
@@ -222,8 +230,8 @@ pub(crate) fn render_samples(
         spp,
         "samples",
     );
-    // Pixel samples done (for the bar) and the frame's sums.
-    let done = Mutex::new((0u64, &mut *accumulation));
+    // Pixel samples done (for the bar), and the sums each device or unit brought back.
+    let done = Mutex::new((0u64, Vec::<Accumulation>::new()));
     let failed = AtomicBool::new(false);
     let shares: Vec<Result<DeviceShare>> = std::thread::scope(|s| {
         let handles: Vec<_> = renderers
@@ -300,7 +308,7 @@ pub(crate) fn render_samples(
                                     .render_samples(camera, settings, range, &mut part, stop, false)
                                     .inspect_err(|_| failed.store(true, Ordering::Relaxed))?;
                                 let mut done = done.lock().expect("no thread panics holding it");
-                                done.1.add(&part).expect(OVERFLOW);
+                                done.1.push(part);
                                 times.trace_ms
                             }
                         };
@@ -332,7 +340,7 @@ pub(crate) fn render_samples(
                         if let Some(sums) = sums {
                             share.pixel_samples = sums.pixels.iter().map(|p| p[3] as u64).sum();
                             let mut done = done.lock().expect("no thread panics holding it");
-                            done.1.add(&sums).expect(OVERFLOW);
+                            done.1.push(sums);
                         }
                     }
                     Ok(share)
@@ -360,7 +368,18 @@ pub(crate) fn render_samples(
             "no device took any of the frame's samples".into(),
         ));
     }
-    Ok(out)
+    // Integer sums add in any order: the sums of the whole region, if a device brought
+    // them back (a GPU's, usually), take the others in, and no frame-sized copy is made.
+    let mut sums = done.into_inner().expect("no thread panics holding it").1;
+    let whole = sums.iter().position(|s| s.region == region);
+    let mut frame = match whole {
+        Some(i) => sums.swap_remove(i),
+        None => Accumulation::of_region(width, height, region),
+    };
+    for part in &sums {
+        frame.add(part).expect(OVERFLOW);
+    }
+    Ok((frame, out))
 }
 
 #[cfg(test)]
@@ -377,19 +396,18 @@ mod tests {
         // The first units: a sample of a band each.
         assert_eq!(q.take(0, Instant::now()), Some((0..1, 0..1)));
         assert_eq!(q.take(1, Instant::now()), Some((1..2, 0..1)));
-        // Bands 2 and 3 are the furthest behind; the fast device takes both, several samples.
+        // Bands 2 and 3 are the furthest behind: the fast device takes both, and catches
+        // them up with the others...
         q.rates = vec![Some(1e6), Some(1e3)];
         q.done = vec![u64::MAX / 4; 2];
         let (bands, samples) = q.take(0, Instant::now()).unwrap();
-        assert_eq!(bands, 2..4);
-        assert!(samples.start == 0 && samples.len() > 1, "{samples:?}");
-        assert_eq!(
-            q.rows(&bands),
-            Region {
-                y0: 20,
-                ..Region::whole(100, 40)
-            }
-        );
+        assert_eq!((bands.clone(), samples), (2..4, 0..1));
+        let rows = q.rows(&bands);
+        assert_eq!((rows.y0, rows.y1), (20, 40));
+        // ... then takes every band, several samples.
+        let (bands, samples) = q.take(0, Instant::now()).unwrap();
+        assert_eq!(bands, 0..4);
+        assert!(samples.start == 1 && samples.len() > 1, "{samples:?}");
         // Less than a sample of a run: a sample of fewer of its bands.
         let mut q = Queue::new(Region::whole(100, 40), 0..100, 4, 2);
         q.rates = vec![Some(1_000.0), Some(1_000.0)];
