@@ -268,8 +268,8 @@ fn a_base_colour_texture_is_read_filtered_and_matches_the_host() {
     assert!(red > 100 && blue > 100, "red {red}, blue {blue}");
 }
 
-#[test]
-fn cut_out_masks_let_every_kind_of_ray_through_their_holes_on_every_layout() {
+/// A quad cut out in a checker (`map_d`) in front of a wall.
+fn cut_out_quad_and_wall() -> (tempfile::TempDir, PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     checker_png(
         &dir.path().join("mask.png"),
@@ -281,6 +281,12 @@ fn cut_out_masks_let_every_kind_of_ray_through_their_holes_on_every_layout() {
         dir.path(),
         "newmtl quad\nKd 0.8 0.8 0.8\nmap_d mask.png\nnewmtl wall\nKd 0.5 0.5 0.5\n",
     );
+    (dir, mesh)
+}
+
+#[test]
+fn cut_out_masks_let_camera_rays_through_their_holes_on_every_layout() {
+    let (dir, mesh) = cut_out_quad_and_wall();
     // Camera rays: the wall shows through the holes (its normal has another colour).
     let host = host_and_devices(
         dir.path(),
@@ -300,7 +306,14 @@ fn cut_out_masks_let_every_kind_of_ray_through_their_holes_on_every_layout() {
         through > 100,
         "{through} pixels show the wall through the holes"
     );
-    // Shadow and bounce rays: the sun casts the checker's shadow on the wall.
+}
+
+/// The shadow and bounce rays of [`cut_out_masks_let_camera_rays_through_their_holes_on_every_layout`]'s
+/// scene (a test of its own, so that the two halves' program compiles run side by side).
+#[test]
+fn cut_out_masks_let_shadow_and_bounce_rays_through_their_holes() {
+    let (dir, mesh) = cut_out_quad_and_wall();
+    // The sun casts the checker's shadow on the wall.
     for shade in ["shadow", "path"] {
         host_and_devices(
             dir.path(),
