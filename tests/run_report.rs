@@ -106,6 +106,19 @@ fn stage_times_add_up_to_the_total_and_json_summarises_the_run() {
         }
         let total: f64 = stages.iter().map(|s| s["ms"].as_f64().unwrap()).sum();
         let wall = summary["wall_ms"].as_f64().unwrap();
+        // The sampling's wall time holds at least its stage (for one OpenCL device, its
+        // kernels' time) and fits in the run's.
+        let stage = |name: &str| {
+            stages.iter().find(|s| s["name"] == name).unwrap()["ms"]
+                .as_f64()
+                .unwrap()
+        };
+        let sampling = summary["sampling_ms"].as_f64().unwrap();
+        assert!(
+            sampling >= stage("samples") && sampling <= wall,
+            "{method}: sampling {sampling} ms, samples stage {}, wall {wall}",
+            stage("samples")
+        );
         assert!(
             (total - wall).abs() <= 1e-6 * wall,
             "{method}: stages {total} ms, wall {wall} ms"
