@@ -124,7 +124,7 @@ pub(crate) fn tune_device(
 ) -> Result<Vec<TuneResult>> {
     let camera = Camera::bench(&mesh.bounds(), 1920, 1080)?;
     let shade = ShadeParams::new(Shade::Lambert, &camera, &mesh.bounds());
-    let rays = diffuse_rays(mesh, &camera);
+    let rays = diffuse_rays(mesh, &camera, 1);
     let mut results = Vec::new();
     for layout in Layout::ALL {
         let options = PrepareOptions {
@@ -152,7 +152,7 @@ pub(crate) fn tune_device(
                             renderer.trace_rays(&rays, f32::INFINITY, false)?.1.trace_ms
                         }
                         // Tuning measures primary and diffuse rays only.
-                        RayKind::Primary | RayKind::Path => {
+                        RayKind::Primary | RayKind::Diffuse16 | RayKind::Path => {
                             renderer.render(&camera, &shade, false)?.1.trace_ms
                         }
                     })

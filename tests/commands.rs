@@ -462,6 +462,49 @@ fn bench_refuses_bad_path_settings_with_one_line() {
     }
 }
 
+/// `--rays diffuse-16` traces 16 rays for each ray of the plain diffuse batch, and names
+/// its rows so.
+#[test]
+fn bench_diffuse_16_rows_trace_sixteen_rays_for_each_diffuse_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = tiny_scene(dir.path());
+    let csv_path = dir.path().join("bench.csv");
+    let mut cmd = cltrace();
+    cmd.arg("bench")
+        .arg(&scene)
+        .args(["--methods", "cpu-bvh", "--rays", "diffuse,diffuse-16"])
+        .args([
+            "--resolutions",
+            "32x24",
+            "--warmup",
+            "0",
+            "--repetitions",
+            "1",
+        ])
+        .arg("--csv")
+        .arg(&csv_path);
+    succeeded(&run(cmd));
+    let mut csv = csv::Reader::from_path(&csv_path).unwrap();
+    let header = csv.headers().unwrap().clone();
+    let at = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let rows: Vec<(String, u64, f64)> = csv
+        .records()
+        .map(|r| {
+            let r = r.unwrap();
+            (
+                r[at("ray_kind")].to_string(),
+                r[at("rays")].parse().unwrap(),
+                r[at("mrays_per_s")].parse().unwrap(),
+            )
+        })
+        .collect();
+    let kinds: Vec<&str> = rows.iter().map(|r| r.0.as_str()).collect();
+    assert_eq!(kinds, ["diffuse", "diffuse-16"]);
+    assert!(rows[0].1 > 100, "{rows:?}");
+    assert_eq!(rows[1].1, 16 * rows[0].1, "{rows:?}");
+    assert!(rows.iter().all(|r| r.2 > 0.0), "{rows:?}");
+}
+
 /// `cltrace tune` (one repetition, the test device) writes a cache naming a layout and a
 /// work-group for the device, and a render pointed at that cache takes its layout.
 #[test]

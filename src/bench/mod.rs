@@ -43,6 +43,10 @@ pub enum RayKind {
     /// by 1e-4 of the scene radius along the normal turned to the eye) in a cosine-weighted
     /// direction about that normal: the incoherent case.
     Diffuse,
+    /// The diffuse construction with [`DIFFUSE_16_RAYS`] independent rays per hit pixel,
+    /// traced as one batch: the incoherent case at full occupancy (the plain diffuse batch
+    /// of a 1080p frame is about one wave of a large GPU's resident threads).
+    Diffuse16,
     /// Progressive path tracing of the bench view at `--path-spp` samples per pixel and
     /// `--path-bounces` bounces: every segment counted, shadow rays included.
     Path,
@@ -50,7 +54,12 @@ pub enum RayKind {
 
 impl RayKind {
     /// Every kind, in the order the tables list them.
-    pub const ALL: [RayKind; 3] = [RayKind::Primary, RayKind::Diffuse, RayKind::Path];
+    pub const ALL: [RayKind; 4] = [
+        RayKind::Primary,
+        RayKind::Diffuse,
+        RayKind::Diffuse16,
+        RayKind::Path,
+    ];
 
     /// The kinds measured when `--rays` is not given. Path tracing is left out: a frame of
     /// it is 16 samples a pixel of up to 10 segments each, shadow rays besides (the room of
@@ -64,6 +73,7 @@ impl RayKind {
         match self {
             RayKind::Primary => "primary",
             RayKind::Diffuse => "diffuse",
+            RayKind::Diffuse16 => "diffuse-16",
             RayKind::Path => "path",
         }
     }
@@ -76,6 +86,10 @@ impl RayKind {
                 "For each pixel whose primary ray hit, one closest-hit ray from the hit point \
                  (offset by 1e-4 of the scene radius along the normal turned to the eye) in a \
                  cosine-weighted direction about that normal: the incoherent case"
+            }
+            RayKind::Diffuse16 => {
+                "The diffuse construction with 16 independent rays per hit pixel (16 passes \
+                 over the image), traced as one batch: the incoherent case at full occupancy"
             }
             RayKind::Path => {
                 "Path tracing of the same view with the scene's materials, --path-spp samples \
@@ -94,6 +108,9 @@ impl std::str::FromStr for RayKind {
         crate::error::by_name(s, &RayKind::ALL, RayKind::name, "ray kind")
     }
 }
+
+/// Rays per hit pixel of [`RayKind::Diffuse16`].
+pub(crate) const DIFFUSE_16_RAYS: u32 = 16;
 
 /// Side of the pixel tiles that order the diffuse rays.
 pub(crate) const DIFFUSE_TILE: u32 = 16;
@@ -117,28 +134,39 @@ pub(crate) fn tile_order(width: u32, height: u32, tile: u32) -> impl Iterator<It
 /// of [`tile_order`], as the render kernels' 2D work-groups trace their bounces: rays from
 /// neighbouring pixels start close together and share the nodes around their origins
 /// (measured against scanline order: docs/performance.md, "Order of the diffuse batch"
-/// under "Diffuse rays").
-pub(crate) fn diffuse_rays(mesh: &Mesh, camera: &Camera) -> Vec<Ray> {
+/// under "Diffuse rays"). With `passes` above 1, the batch is that many passes over the
+/// image, pass `k` drawing sample `k` of each pixel's random numbers (pass 0 is the plain
+/// diffuse batch), as a renderer traces one sample of every pixel after another.
+pub(crate) fn diffuse_rays(mesh: &Mesh, camera: &Camera, passes: u32) -> Vec<Ray> {
     use crate::intersect::ClosestHit;
     use crate::render::sampling::{Sampler, cosine_direction};
+    use glam::Vec3;
     use rayon::prelude::*;
     let bvh = Bin32Bvh::new(Bvh::build(mesh, &BuildOptions::default()), mesh);
     let offset = 1e-4 * mesh.bounds().extent().length() * 0.5;
     let pinhole = camera.pinhole();
     let width = camera.width;
     let pixels: Vec<u32> = tile_order(camera.width, camera.height, DIFFUSE_TILE).collect();
-    pixels
+    // Each hit pixel's origin and normal, found once for every pass.
+    let hits: Vec<(u32, Vec3, Vec3)> = pixels
         .into_par_iter()
         .with_min_len(4096)
         .filter_map(|pixel| {
             let ray = pinhole.ray(pixel % width, pixel / width);
             let (i, t) = bvh.closest_hit(&ray, f32::INFINITY)?;
             let n = bvh.triangles[i].facing_normal(ray.dir);
-            let s = Sampler::new(0, pixel, 0);
-            Some(Ray::new(
-                ray.at(t) + n * offset,
-                cosine_direction(n, s.get(0), s.get(1)),
-            ))
+            Some((pixel, ray.at(t) + n * offset, n))
+        })
+        .collect();
+    (0..passes)
+        .flat_map(|k| {
+            hits.par_iter()
+                .with_min_len(4096)
+                .map(move |&(pixel, origin, n)| {
+                    let s = Sampler::new(0, pixel, k);
+                    Ray::new(origin, cosine_direction(n, s.get(0), s.get(1)))
+                })
+                .collect::<Vec<_>>()
         })
         .collect()
 }
@@ -320,13 +348,13 @@ fn run_into(
         let load_ms = start.elapsed().as_secs_f64() * 1e3;
         crate::interrupt::check()?;
         let mut diffuse = std::collections::HashMap::new();
-        if req.ray_kinds.contains(&RayKind::Diffuse) {
-            bar.set_message(format!("diffuse rays for {}", scene.name));
-            for &(w, h) in &req.resolutions {
-                diffuse.insert(
-                    (w, h),
-                    diffuse_rays(&mesh, &Camera::bench(&mesh.bounds(), w, h)?),
-                );
+        for (kind, passes) in [(RayKind::Diffuse, 1), (RayKind::Diffuse16, DIFFUSE_16_RAYS)] {
+            if req.ray_kinds.contains(&kind) {
+                bar.set_message(format!("{} rays for {}", kind.name(), scene.name));
+                for &(w, h) in &req.resolutions {
+                    let camera = Camera::bench(&mesh.bounds(), w, h)?;
+                    diffuse.insert((kind, w, h), diffuse_rays(&mesh, &camera, passes));
+                }
             }
         }
         for &method in &req.methods {
@@ -405,14 +433,17 @@ fn run_into(
                                 device,
                                 size: (width, height),
                             };
-                            let batch =
-                                || diffuse.get(&(width, height)).map_or(&[][..], Vec::as_slice);
+                            let batch = |kind| {
+                                diffuse
+                                    .get(&(kind, width, height))
+                                    .map_or(&[][..], Vec::as_slice)
+                            };
                             let row = match (kind, &mut renderer, &mut path_renderer) {
                                 (RayKind::Primary, Some(renderer), _) => {
                                     measure(&run, &timings, renderer, None)?
                                 }
-                                (RayKind::Diffuse, Some(renderer), _) => {
-                                    measure(&run, &timings, renderer, Some(batch()))?
+                                (RayKind::Diffuse | RayKind::Diffuse16, Some(renderer), _) => {
+                                    measure(&run, &timings, renderer, Some((kind, batch(kind))))?
                                 }
                                 (RayKind::Path, _, Some(renderer)) => {
                                     measure_path(&run, &path_timings, renderer)?
@@ -527,22 +558,23 @@ impl Run<'_> {
     }
 }
 
-/// A primary run (`diffuse` is `None`) or a diffuse one (its batch of rays): the warm-up,
-/// then the timed frames.
+/// A primary run (`diffuse` is `None`) or a diffuse one (its kind and batch of rays): the
+/// warm-up, then the timed frames.
 fn measure(
     run: &Run,
     timings: &Timings,
     renderer: &mut Renderer,
-    diffuse: Option<&[Ray]>,
+    diffuse: Option<(RayKind, &[Ray])>,
 ) -> Result<BenchRow> {
     let (req, mesh) = (run.req, run.mesh);
     let (width, height) = run.size;
     let camera = Camera::bench(&mesh.bounds(), width, height)?;
     let shade = ShadeParams::new(Shade::Lambert, &camera, &mesh.bounds());
     let (kind, rays) = match diffuse {
-        Some(batch) => (RayKind::Diffuse, batch.len() as u64),
+        Some((kind, batch)) => (kind, batch.len() as u64),
         None => (RayKind::Primary, width as u64 * height as u64),
     };
+    let diffuse = diffuse.map(|(_, batch)| batch);
     // One timed frame of this run: its trace (kernel) time.
     let frame = |renderer: &mut Renderer| -> Result<f64> {
         Ok(match diffuse {
@@ -971,7 +1003,37 @@ fn targets(req: &BenchRequest) -> Result<Vec<Target>> {
 
 #[cfg(test)]
 mod tests {
-    use super::{Estimate, Growth, tile_order};
+    use super::{Estimate, Growth, diffuse_rays, tile_order};
+    use crate::camera::Camera;
+    use crate::mesh::Mesh;
+    use glam::Vec3;
+
+    /// The diffuse-16 batch is 16 passes of the diffuse batch's origins, the first pass the
+    /// diffuse batch itself, each pass with directions of its own.
+    #[test]
+    fn each_pass_of_a_diffuse_batch_leaves_the_same_points_in_new_directions() {
+        // A quad facing the camera, and a triangle behind it to give the bounds depth.
+        let p = vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+            Vec3::new(0.0, 0.0, -1.0),
+        ];
+        let mesh = Mesh::new(p, vec![[0, 1, 2], [0, 2, 3], [0, 1, 4]]);
+        let camera = Camera::bench(&mesh.bounds(), 24, 16).unwrap();
+        let one = diffuse_rays(&mesh, &camera, 1);
+        let three = diffuse_rays(&mesh, &camera, 3);
+        assert!(one.len() > 50, "{} rays", one.len());
+        assert_eq!(three.len(), 3 * one.len());
+        assert_eq!(three[..one.len()], one[..]);
+        for pass in three.chunks(one.len()).skip(1) {
+            for (a, b) in pass.iter().zip(&one) {
+                assert_eq!(a.origin, b.origin);
+                assert_ne!(a.dir, b.dir);
+            }
+        }
+    }
 
     /// Every pixel once, in whole tiles where they fit, cut ones at the right and bottom.
     #[test]
