@@ -815,7 +815,7 @@ impl<'d> ClTracer<'d> {
         let mut group0 = 0usize;
         'groups: while group0 < h {
             let group_rows = capacity.min(h - group0);
-            clear_sums(device, &accum, &rays)?;
+            clear_rows(device, &accum, &rays, 0..accum.height)?;
             // The accumulation image's row 0 is the group's first row; bands run inside it.
             band.row0 = (y0 + group0) as u32;
             let mut stopped = false;
@@ -988,7 +988,7 @@ impl<'d> ClTracer<'d> {
         stop: &std::sync::atomic::AtomicBool,
     ) -> Result<f64> {
         let device = self.device;
-        let (y0, pitch) = (session.region.y0, session.setup.accum.pitch);
+        let y0 = session.region.y0;
         // Clear the runs of rows not touched before.
         let mut row = rows.start;
         while row < rows.end {
@@ -998,7 +998,12 @@ impl<'d> ClTracer<'d> {
                 .take_while(|&&c| c == session.cleared[first])
                 .count();
             if !session.cleared[first] {
-                clear_rows(device, &session.setup, pitch, first..first + run)?;
+                clear_rows(
+                    device,
+                    &session.setup.accum,
+                    &session.setup.rays,
+                    first..first + run,
+                )?;
                 session.cleared[first..first + run].fill(true);
             }
             row += run as u32;
@@ -1344,27 +1349,6 @@ fn kernel_builder<'b>(
     Ok(builder)
 }
 
-/// Enqueues a kernel, waits for it, and returns its device time in milliseconds.
-/// Launches an image kernel over rows `y0 .. y0 + rows` of a `width`-pixel image, the
-/// global size rounded up to whole work-groups; returns its device time in ms.
-/// Zeroes an accumulation image and its ray counts.
-fn clear_sums(
-    device: &ClDevice,
-    accum: &PitchedBuffer<Long4>,
-    rays: &ocl::Buffer<u32>,
-) -> Result<()> {
-    accum
-        .buffer
-        .cmd()
-        .fill(Long4::zero(), None)
-        .enq()
-        .map_err(|e| device.error("clearing the accumulation image", e))?;
-    rays.cmd()
-        .fill(0u32, None)
-        .enq()
-        .map_err(|e| device.error("clearing the ray counts", e))
-}
-
 /// The rays counted in `rows` of a pitched image of counts `width` wide.
 fn row_sums(counts: &[u32], pitch: usize, width: usize, rows: std::ops::Range<usize>) -> u64 {
     rows.map(|y| {
@@ -1385,31 +1369,30 @@ fn long4s(pixels: &mut [[i64; 4]]) -> &mut [Long4] {
     unsafe { std::slice::from_raw_parts_mut(pixels.as_mut_ptr().cast::<Long4>(), pixels.len()) }
 }
 
-/// Clears the sums and ray counts of `rows` (rows of the accumulation image).
+/// Zeroes the sums and ray counts of `rows` (rows of the accumulation image).
 fn clear_rows(
     device: &ClDevice,
-    setup: &SampleSetup,
-    pitch: usize,
+    accum: &PitchedBuffer<Long4>,
+    rays: &ocl::Buffer<u32>,
     rows: std::ops::Range<usize>,
 ) -> Result<()> {
-    let (offset, len) = (rows.start * pitch, rows.len() * pitch);
-    setup
-        .accum
+    let (offset, len) = (rows.start * accum.pitch, rows.len() * accum.pitch);
+    accum
         .buffer
         .cmd()
         .fill(Long4::zero(), Some(len))
         .offset(offset)
         .enq()
         .map_err(|e| device.error("clearing the accumulation image", e))?;
-    setup
-        .rays
-        .cmd()
+    rays.cmd()
         .fill(0u32, Some(len))
         .offset(offset)
         .enq()
         .map_err(|e| device.error("clearing the ray counts", e))
 }
 
+/// Launches an image kernel over rows `y0 .. y0 + rows` of a `width`-pixel image, the
+/// global size rounded up to whole work-groups; returns its device time in ms.
 fn launch_rows(
     device: &ClDevice,
     kernel: &ocl::Kernel,
@@ -1430,20 +1413,10 @@ fn launch_rect(
     origin: [usize; 2],
     size: [usize; 2],
 ) -> Result<f64> {
-    let global = [
-        size[0].div_ceil(local[0]) * local[0],
-        size[1].div_ceil(local[1]) * local[1],
-    ];
-    launch(
-        device,
-        kernel
-            .cmd()
-            .global_work_offset(origin)
-            .global_work_size(global)
-            .local_work_size(local),
-    )
+    wait_ms(device, &queue_rect(device, kernel, local, origin, size)?)
 }
 
+/// Enqueues a kernel, waits for it, and returns its device time in milliseconds.
 fn launch(device: &ClDevice, cmd: ocl::builders::KernelCmd) -> Result<f64> {
     wait_ms(device, &queue_kernel(device, cmd)?)
 }

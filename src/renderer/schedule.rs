@@ -124,11 +124,8 @@ impl Queue {
         if left_in_band == 0 {
             return None;
         }
-        // The bands next to `b` that are as far behind, taken together.
+        // The bands after `b` that are as far behind, taken together (none before it is).
         let mut run = b..b + 1;
-        while run.start > 0 && self.bands[run.start - 1].next == next {
-            run.start -= 1;
-        }
         while run.end < self.bands.len() && self.bands[run.end].next == next {
             run.end += 1;
         }
