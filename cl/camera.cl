@@ -15,12 +15,18 @@
  * [row0, row_end) one launch covers. */
 #define CAMERA_BAND_PARAMS CAMERA_PARAMS, uint width, uint row0, uint row_end
 
+/* A perspective camera's ray through image position (fx, fy), which leaves from the eye:
+ * its direction, unnormalised, the point of the image plane p0 + fx du + fy dv. */
+FORCE_INLINE float3 camera_ray_at_eye(float4 p0, float4 du, float4 dv, float fx, float fy) {
+    return (float3)((p0.x + fx * du.x) + fy * dv.x,
+                    (p0.y + fx * du.y) + fy * dv.y,
+                    (p0.z + fx * du.z) + fy * dv.z);
+}
+
 /* The ray through image position (fx, fy), the lens ignored: its direction, unnormalised,
  * returned, and its origin in *org. Pinhole::ray_at. */
 FORCE_INLINE float3 camera_ray_at(CAMERA_PARAMS, float fx, float fy, float3* org) {
-    float3 pix = (float3)((p0.x + fx * du.x) + fy * dv.x,
-                          (p0.y + fx * du.y) + fy * dv.y,
-                          (p0.z + fx * du.z) + fy * dv.z);
+    float3 pix = camera_ray_at_eye(p0, du, dv, fx, fy);
     if (forward.w != 0.0f) {
         *org = eye.xyz + pix;
         return forward.xyz;

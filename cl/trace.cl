@@ -5,17 +5,26 @@
  * parameters by name (src/device/tracer.rs; tests/layout.rs compares the two lists). */
 
 /* One primary ray per pixel of the band [row0, row_end), written to pitched images whose
- * row 0 is image row row0; with barycentrics not null, also the hit's barycentric weights
- * of the triangle's vertices 1 and 2 (0 for a miss), for version 2 of the hit records. */
-__kernel void trace_primary(SCENE_PARAMS, CAMERA_BAND_PARAMS,
-                            int shade, float near, float far,
-                            __global Hit* hits, uint hit_pitch,
-                            __global uint* colors, uint color_pitch,
-                            __global float2* barycentrics, uint barycentric_pitch) {
+ * row 0 is image row row0; with `general`, from any camera (an orthographic one's rays
+ * leave from the image plane) and, with barycentrics not null, also the hit's barycentric
+ * weights of the triangle's vertices 1 and 2 (0 for a miss), for version 2 of the hit
+ * records. Without `general` every ray leaves from the eye and no barycentrics are
+ * written: that code, though it would not run, costs PoCL 4-9% of primary-ray speed
+ * (docs/bench/2026-12-04-primary-rays-pocl.md), so it is a kernel of its own. */
+#define PRIMARY_PARAMS SCENE_PARAMS, CAMERA_BAND_PARAMS,                 \
+    int shade, float near, float far,                                   \
+    __global Hit* hits, uint hit_pitch,                                 \
+    __global uint* colors, uint color_pitch,                            \
+    __global float2* barycentrics, uint barycentric_pitch
+#define PRIMARY SCENE, CAMERA, width, row0, row_end, shade, near, far, hits, hit_pitch, \
+    colors, color_pitch, barycentrics, barycentric_pitch
+
+FORCE_INLINE void primary_pixel(PRIMARY_PARAMS, const bool general) {
     uint x = get_global_id(0), y = get_global_id(1);
     if (x >= width || y < row0 || y >= row_end) return;
-    float3 org;
-    float3 dir = camera_ray(CAMERA, x, y, &org);
+    float3 org = eye.xyz;
+    float3 dir = general ? camera_ray(CAMERA, x, y, &org)
+                         : camera_ray_at_eye(p0, du, dv, (float)x + 0.5f, (float)y + 0.5f);
     float t;
     uint best = trace(SCENE, org, dir, INFINITY, false, false, &t);
     float3 n = (float3)(0.0f);
@@ -23,7 +32,7 @@ __kernel void trace_primary(SCENE_PARAMS, CAMERA_BAND_PARAMS,
         n = shading_normal(SURFACE, &tris[best], org, dir);
     }
     store_pixel(hits, hit_pitch, colors, color_pitch, x, y - row0, best, t, dir, tris, n, shade, near, far);
-    if (barycentrics != 0) {
+    if (general && barycentrics != 0) {
         float2 b = (float2)(0.0f);
         if (best != MISS) {
             WatertightRay r = watertight_ray(org, dir);
@@ -32,6 +41,12 @@ __kernel void trace_primary(SCENE_PARAMS, CAMERA_BAND_PARAMS,
         barycentrics[(y - row0) * barycentric_pitch + x] = b;
     }
 }
+
+/* A perspective camera's primary rays, without barycentrics (barycentrics is not read). */
+__kernel void trace_primary(PRIMARY_PARAMS) { primary_pixel(PRIMARY, false); }
+
+/* Any camera's primary rays, with barycentrics where they are asked for. */
+__kernel void trace_primary_general(PRIMARY_PARAMS) { primary_pixel(PRIMARY, true); }
 
 /* Arbitrary rays: origin and t_max in rays[2i] (xyz, w), direction in rays[2i + 1]. With
  * any_hit set, any hit before t_max is reported, not necessarily the closest. */

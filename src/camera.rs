@@ -654,11 +654,17 @@ impl Pinhole {
         let pix = |k: usize| (self.p0[k] + fx * self.du[k]) + fy * self.dv[k];
         let p = Vec3::new(pix(0), pix(1), pix(2));
         let eye = Vec3::from_slice(&self.eye[..3]);
-        if self.forward[3] != 0.0 {
+        if self.is_orthographic() {
             Ray::new(eye + p, Vec3::from_slice(&self.forward[..3]))
         } else {
             Ray::new(eye, p)
         }
+    }
+
+    /// Whether rays leave from the image plane, all in one direction, rather than from the
+    /// eye.
+    pub fn is_orthographic(&self) -> bool {
+        self.forward[3] != 0.0
     }
 
     /// Whether the thin lens is open (rays need a lens sample).

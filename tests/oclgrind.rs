@@ -76,6 +76,26 @@ fn every_kernel_runs_clean_under_oclgrind() {
             }
         }
     }
+    // trace_primary_general: an orthographic camera, with barycentric hit records.
+    let hits = dir.path().join("hits.bin");
+    let mut args = vec![
+        "render", scene, "-q", "-o", png, "--width", "8", "--height", "6",
+    ];
+    args.extend([
+        "--projection",
+        "orthographic",
+        "--hits-format",
+        "v2",
+        "--hits",
+    ]);
+    args.push(hits.to_str().unwrap());
+    for program in &programs[..2] {
+        let args = [&args[..], program].concat();
+        let log = checked(&oclgrind, dir.path(), &args);
+        if !log.trim().is_empty() {
+            found.push(format!("{args:?}:\n{log}"));
+        }
+    }
     // Every scattering model in the path tracer, under the sky.
     let materials = dir.path().join("materials.toml");
     let mut text = String::new();

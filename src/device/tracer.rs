@@ -28,12 +28,16 @@ pub(crate) const LAUNCH_TARGET_MS: f64 = 100.0;
 /// stack (`STATUS_STACK_OVERFLOW` in the kernels).
 pub const STATUS_STACK_OVERFLOW: u32 = 1;
 
-/// The kernels of a tracing program: `trace_primary` and `trace_rays` of cl/trace.cl, and
-/// the progressive shade modes of cl/integrator.cl.
+/// The kernels of a tracing program: `trace_primary`, `trace_primary_general` and
+/// `trace_rays` of cl/trace.cl, and the progressive shade modes of cl/integrator.cl.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kernel {
-    /// `trace_primary`: one primary ray per pixel of a band of rows, hit and colour.
+    /// `trace_primary`: one primary ray per pixel of a band of rows, hit and colour, from
+    /// a perspective camera.
     TracePrimary,
+    /// `trace_primary_general`: `trace_primary` for any camera, with barycentrics when
+    /// they are asked for (the general code slows PoCL's `trace_primary` even unused).
+    TracePrimaryGeneral,
     /// `trace_rays`: a list of arbitrary rays, closest or any hit (the diffuse rays).
     TraceRays,
     /// `sample_ao`: one ambient occlusion sample per pixel of a band.
@@ -46,8 +50,9 @@ pub enum Kernel {
 
 impl Kernel {
     /// Every kernel, the closest-hit ones first.
-    pub const ALL: [Kernel; 5] = [
+    pub const ALL: [Kernel; 6] = [
         Kernel::TracePrimary,
+        Kernel::TracePrimaryGeneral,
         Kernel::TraceRays,
         Kernel::SampleAo,
         Kernel::SampleShadow,
@@ -58,6 +63,7 @@ impl Kernel {
     pub fn name(self) -> &'static str {
         match self {
             Kernel::TracePrimary => "trace_primary",
+            Kernel::TracePrimaryGeneral => "trace_primary_general",
             Kernel::TraceRays => "trace_rays",
             Kernel::SampleAo => "sample_ao",
             Kernel::SampleShadow => "sample_shadow",
@@ -84,7 +90,9 @@ impl Kernel {
             [BruteSceneParams::NAMES, SurfaceParams::NAMES].concat()
         };
         let own = match self {
-            Kernel::TracePrimary => [BandParams::NAMES, PrimaryParams::NAMES].concat(),
+            Kernel::TracePrimary | Kernel::TracePrimaryGeneral => {
+                [BandParams::NAMES, PrimaryParams::NAMES].concat()
+            }
             Kernel::TraceRays => TraceRaysParams::NAMES.to_vec(),
             Kernel::SampleAo | Kernel::SampleShadow | Kernel::SamplePath => {
                 [LightParams::NAMES, BandParams::NAMES, SampleParams::NAMES].concat()
@@ -451,7 +459,8 @@ pub struct ClTracer<'d> {
     program: Program,
     scene: Scene,
     lights: Option<DeviceLights>,
-    primary: ocl::Kernel,
+    /// `trace_primary` and `trace_primary_general`, bound to the scene.
+    primary: [ocl::Kernel; 2],
     bands: BandPlanner,
     sample_bands: BandPlanner,
     /// The most bytes one output image may take: the device's largest allocation and an
@@ -608,14 +617,7 @@ impl<'d> ClTracer<'d> {
         scene: Scene,
         first_band_pixels: usize,
     ) -> Result<Self> {
-        // Bound now, with the frame's values set by render().
-        let kernel = Kernel::TracePrimary;
-        let mut builder = kernel_builder(device, program, kernel, &scene)?;
-        BandParams::default().bind(&mut builder);
-        PrimaryParams::default().bind(&mut builder);
-        let primary = builder
-            .build()
-            .map_err(|e| device.error(&format!("creating the {} kernel", kernel.name()), e))?;
+        let primary = primary_kernels(device, program, &scene)?;
         Ok(ClTracer {
             device,
             program: program.clone(),
@@ -751,13 +753,7 @@ impl<'d> ClTracer<'d> {
             ],
         )?;
         self.scene.surface = DeviceSurface::upload(device, surface)?;
-        let kernel = Kernel::TracePrimary;
-        let mut builder = kernel_builder(device, &self.program, kernel, &self.scene)?;
-        BandParams::default().bind(&mut builder);
-        PrimaryParams::default().bind(&mut builder);
-        self.primary = builder
-            .build()
-            .map_err(|e| device.error(&format!("creating the {} kernel", kernel.name()), e))?;
+        self.primary = primary_kernels(device, &self.program, &self.scene)?;
         Ok(())
     }
 
@@ -1123,7 +1119,11 @@ impl<'d> ClTracer<'d> {
             false => None,
         };
 
-        let k = &self.primary;
+        let general = shade.barycentrics || camera.is_orthographic();
+        let (kernel, k) = match general {
+            false => (Kernel::TracePrimary, &self.primary[0]),
+            true => (Kernel::TracePrimaryGeneral, &self.primary[1]),
+        };
         // The band (row0, row_end) changes from launch to launch.
         let mut band = BandParams::new(camera, width);
         let params = PrimaryParams {
@@ -1153,10 +1153,7 @@ impl<'d> ClTracer<'d> {
             band.row0 = y0 as u32;
             band.row_end = (y0 + rows) as u32;
             band.set(k).and_then(|()| params.set(k)).map_err(|e| {
-                device.error(
-                    &format!("setting the arguments of {}", Kernel::TracePrimary.name()),
-                    e,
-                )
+                device.error(&format!("setting the arguments of {}", kernel.name()), e)
             })?;
             let ms = launch_rows(device, k, local, w, y0, rows)?;
             times.kernel_ms += ms;
@@ -1317,6 +1314,27 @@ fn require_kernel(program: &Program, kernel: Kernel) -> Result<()> {
         )));
     }
     Ok(())
+}
+
+/// `trace_primary` and `trace_primary_general` for `scene`, the frame's values to be set by
+/// [`ClTracer::render`].
+fn primary_kernels(
+    device: &ClDevice,
+    program: &Program,
+    scene: &Scene,
+) -> Result<[ocl::Kernel; 2]> {
+    let build = |kernel: Kernel| {
+        let mut builder = kernel_builder(device, program, kernel, scene)?;
+        BandParams::default().bind(&mut builder);
+        PrimaryParams::default().bind(&mut builder);
+        builder
+            .build()
+            .map_err(|e| device.error(&format!("creating the {} kernel", kernel.name()), e))
+    };
+    Ok([
+        build(Kernel::TracePrimary)?,
+        build(Kernel::TracePrimaryGeneral)?,
+    ])
 }
 
 /// A builder of `kernel` of `program` with the scene's parameters bound (by name).
