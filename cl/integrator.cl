@@ -4,7 +4,8 @@
  * region of the image. Mirrored by
  * src/render/integrator.rs, whence SHADOW_AMBIENT and ROULETTE_AFTER come. Compiled, like
  * trace.cl, against a BVH or every triangle, into programs built with sampling; the host
- * binds the parameters by name (src/device/tracer.rs; tests/layout.rs compares them). */
+ * binds the parameters by name (src/device/tracer.rs; tests/layout.rs compares them). Each
+ * kernel is compiled only where its KERNEL_<NAME> is defined, as in trace.cl. */
 
 /* jittered_ray, the camera ray of a sample, is in sampling.cl (so the probe program can
  * compare it with the host's). */
@@ -82,6 +83,7 @@ FORCE_INLINE bool occluded(SCENE_PARAMS, float3 org, float3 dir, float t_max) {
  * one pixel's footprint there. */
 FORCE_INLINE float camera_cone(float4 du, float t) { return t * length3(du.xyz); }
 
+#ifdef KERNEL_SAMPLE_AO
 __kernel void sample_ao(SAMPLE_PARAMS) {
     SAMPLE_CAMERA_HIT
     float3 radiance = (float3)(0.0f);
@@ -99,7 +101,9 @@ __kernel void sample_ao(SAMPLE_PARAMS) {
     }
     add_sample(accum, rays, accum_pitch, x - col0, y - row0, radiance, count);
 }
+#endif
 
+#ifdef KERNEL_SAMPLE_SHADOW
 __kernel void sample_shadow(SAMPLE_PARAMS) {
     SAMPLE_CAMERA_HIT
     float3 radiance = (float3)(0.0f);
@@ -120,6 +124,7 @@ __kernel void sample_shadow(SAMPLE_PARAMS) {
     }
     add_sample(accum, rays, accum_pitch, x - col0, y - row0, radiance, count);
 }
+#endif
 
 /* The radiance an emitter e sends from its point with barycentrics (w0, w1, 1 - w0 - w1):
  * its material's emission, times its emission texture there (full resolution). */
@@ -153,6 +158,7 @@ FORCE_INLINE float3 scatter_from(const Shading* sh, bool lambert, float3 n, floa
     return bsdf_eval(sh, wo_l, (float3)(dot(l, tn), dot(l, bn), dot(l, n)), pdf);
 }
 
+#ifdef KERNEL_SAMPLE_PATH
 __kernel void sample_path(SAMPLE_PARAMS) {
     SAMPLE_PIXEL
     float3 org;
@@ -160,7 +166,7 @@ __kernel void sample_path(SAMPLE_PARAMS) {
     float3 radiance = (float3)(0.0f), throughput = (float3)(1.0f);
     uint count = 1;
     float t;
-    uint hit = trace(SCENE, org, dir, INFINITY, false, false, &t);
+    uint hit;
     /* The ray cone's width at the last hit (0 at the eye), for texture filtering. */
     float cone = 0.0f;
     /* The density of the last bounce's direction, to weigh an emitter it hits against
@@ -168,6 +174,10 @@ __kernel void sample_path(SAMPLE_PARAMS) {
      * it: camera rays, delta lobes, light through the surface. */
     float last_pdf = 0.0f;
     for (uint bounce = 0;; ++bounce) {
+        /* One call site for the camera ray and every bounce: each inlined traversal costs
+         * compile time, and on the H200 the one site also ran 1.4-4.4% faster
+         * (docs/bench/2026-12-04-first-image.md). */
+        hit = trace(SCENE, org, dir, INFINITY, false, true, &t);
         if (hit == MISS) {
 #if defined(ENVIRONMENT)
             float env_pdf;
@@ -312,7 +322,7 @@ __kernel void sample_path(SAMPLE_PARAMS) {
         dir = bs.wi;
         last_pdf = bs.delta || bs.transmitted ? 0.0f : bs.pdf;
         count += 1;
-        hit = trace(SCENE, org, dir, INFINITY, false, true, &t);
     }
     add_sample(accum, rays, accum_pitch, x - col0, y - row0, radiance, count);
 }
+#endif

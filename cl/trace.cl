@@ -2,7 +2,9 @@
  * plain triangle list (cl-brute), whichever scene file the program has before this one:
  * the thesis's GPU brute force and GPU SAH-BVH stages from one source. Their frames are
  * compared pixel by pixel with the host's (src/render/cpu.rs). The host binds their
- * parameters by name (src/device/tracer.rs; tests/layout.rs compares the two lists). */
+ * parameters by name (src/device/tracer.rs; tests/layout.rs compares the two lists). Like
+ * every kernel, each is compiled only into programs that define its KERNEL_<NAME> (the
+ * host's Kernels): a cold compile costs about as much per kernel. */
 
 /* One primary ray per pixel of the band [row0, row_end), written to pitched images whose
  * row 0 is image row row0; with `general`, from any camera (an orthographic one's rays
@@ -43,13 +45,18 @@ FORCE_INLINE void primary_pixel(PRIMARY_PARAMS, const bool general) {
 }
 
 /* A perspective camera's primary rays, without barycentrics (barycentrics is not read). */
+#ifdef KERNEL_TRACE_PRIMARY
 __kernel void trace_primary(PRIMARY_PARAMS) { primary_pixel(PRIMARY, false); }
+#endif
 
 /* Any camera's primary rays, with barycentrics where they are asked for. */
+#ifdef KERNEL_TRACE_PRIMARY_GENERAL
 __kernel void trace_primary_general(PRIMARY_PARAMS) { primary_pixel(PRIMARY, true); }
+#endif
 
 /* Arbitrary rays: origin and t_max in rays[2i] (xyz, w), direction in rays[2i + 1]. With
  * any_hit set, any hit before t_max is reported, not necessarily the closest. */
+#ifdef KERNEL_TRACE_RAYS
 __kernel void trace_rays(SCENE_PARAMS, __global const float4* rays, uint count, int any_hit,
                          __global Hit* hits) {
     uint i = get_global_id(0);
@@ -63,3 +70,4 @@ __kernel void trace_rays(SCENE_PARAMS, __global const float4* rays, uint count, 
     h.t = best == MISS ? INFINITY : t * length3(dir);
     hits[i] = h;
 }
+#endif

@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use crate::brute::BruteForce;
 use crate::bvh::{Bin32Bvh, Bin32Node, BuildOptions, Bvh, BvhStats, DeviceLayout, Layout};
 use crate::camera::Camera;
-use crate::device::{ClDevice, ClTracer, default_layout};
+use crate::device::{ClDevice, ClTracer, Kernels, default_layout};
 use crate::error::Result;
 use crate::geometry::Ray;
 use crate::intersect::{ClosestHit, Triangle, triangles_in_order};
@@ -58,8 +58,8 @@ pub struct PrepareOptions {
     /// tracer's default. One the device cannot run is ignored (it may come from a stale
     /// tuning cache).
     pub work_group: Option<[usize; 2]>,
-    /// Also compile the progressive shade modes (OpenCL methods).
-    pub sampling: bool,
+    /// The kernels to compile (OpenCL methods): by default the closest-hit ones.
+    pub kernels: Kernels,
     /// The crease angle of smooth normals, in degrees, for triangle corners without a
     /// normal (0: faceted); `None` takes [`DEFAULT_CREASE_ANGLE`].
     pub crease_angle: Option<f32>,
@@ -207,7 +207,7 @@ impl<'d> Renderer<'d> {
         device: Option<&'d ClDevice>,
         timings: &mut Timings,
     ) -> Result<Self> {
-        let sampling = options.sampling;
+        let kernels = options.kernels;
         let features = SurfaceFeatures {
             environment: options.lights.environment.is_some(),
             punctual: !options.lights.punctual.is_empty(),
@@ -247,7 +247,7 @@ impl<'d> Renderer<'d> {
             (Method::ClBrute, _) => {
                 let device = device();
                 let program = timings.time("compile", || {
-                    ClTracer::compile_for(device, None, sampling, features)
+                    ClTracer::compile_for(device, None, kernels, features)
                 })?;
                 let triangles = all();
                 let emitters =
@@ -276,7 +276,7 @@ impl<'d> Renderer<'d> {
                     timings.time("lights", || Emitters::new(&laid.triangles, &materials.list));
                 let program = timings.time("compile", || {
                     let bvh = Some((laid.layout, laid.stack_size));
-                    ClTracer::compile_for(device, bvh, sampling, features)
+                    ClTracer::compile_for(device, bvh, kernels, features)
                 })?;
                 let tracer = timings.time("upload", || -> Result<ClTracer> {
                     let mut t = ClTracer::with_layout(device, &program, &laid)?;

@@ -526,7 +526,7 @@ fn shadow_samples(
         build: BuildOptions::default(),
         layout: Some(Layout::default()),
         work_group: None,
-        sampling: true,
+        kernels: cltrace::device::Kernels::ALL,
         crease_angle: None,
         two_sided_lights: false,
         lights: Default::default(),

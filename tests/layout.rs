@@ -12,8 +12,9 @@ use cltrace::bvh::bin64::Bin64Node;
 use cltrace::bvh::cwbvh::CwbvhNode;
 use cltrace::bvh::{Bin32Bvh, Bin32Node, BuildOptions, Bvh, DeviceLayout, Layout};
 use cltrace::bvh::{wide4::Wide4Node, wide8::Wide8Node};
+use cltrace::camera::{Camera, CameraSettings, Projection};
 use cltrace::device::tracer::STATUS_STACK_OVERFLOW;
-use cltrace::device::{ClDevice, ClTracer, Kernel, shared_constants};
+use cltrace::device::{ClDevice, ClTracer, Kernel, Kernels, shared_constants};
 use cltrace::input::generate::Generator;
 use cltrace::intersect::{ROBUST_EXIT, Triangle};
 
@@ -26,7 +27,7 @@ use cltrace::render::integrator::{
     SampleSettings,
 };
 use cltrace::render::sampling::{DIMS_PER_BOUNCE, LENS_DIM, LENS_TRIES};
-use cltrace::render::{Hit, MISS, Shade};
+use cltrace::render::{Hit, MISS, Shade, ShadeParams};
 use ocl::core::{KernelArgInfo, KernelArgInfoResult, KernelInfo, KernelInfoResult};
 
 /// Runs the one-work-item probe kernel `name`, which writes `len` numbers.
@@ -218,7 +219,7 @@ fn kernel_parameters_match_the_host_bindings() {
     let scenes = std::iter::once(None).chain(Layout::ALL.map(|layout| Some((layout, 8))));
     for bvh in scenes {
         let program = device
-            .compile_program(bvh, true, "-cl-kernel-arg-info")
+            .compile_program(bvh, Kernels::ALL, "-cl-kernel-arg-info")
             .unwrap();
         for kernel in Kernel::ALL {
             let k = ocl::core::create_kernel(program.ocl(), kernel.name()).unwrap();
@@ -247,7 +248,7 @@ fn kernel_parameters_match_the_host_bindings() {
 }
 
 /// A program knows the scene it was compiled for: a tracer refuses one of another layout
-/// or of brute force, and a sampling launch from a program compiled without sampling is an
+/// or of brute force, and a launch of a kernel the program was compiled without is an
 /// error.
 #[test]
 fn a_tracer_refuses_a_program_compiled_for_another_scene() {
@@ -270,7 +271,12 @@ fn a_tracer_refuses_a_program_compiled_for_another_scene() {
     refused(ClTracer::brute(&device, &bin32, &triangles));
     let laid = DeviceLayout::new(flat.clone(), Layout::Cwbvh, sah);
     refused(ClTracer::with_layout(&device, &bin32, &laid));
-    let cwbvh = ClTracer::compile(&device, Some((Layout::Cwbvh, laid.stack_size)), false).unwrap();
+    let cwbvh = ClTracer::compile(
+        &device,
+        Some((Layout::Cwbvh, laid.stack_size)),
+        Kernels::TRACING,
+    )
+    .unwrap();
     refused(ClTracer::bvh(&device, &cwbvh, &flat));
 
     // The right program is taken, but it has no sampling kernels.
@@ -293,5 +299,39 @@ fn a_tracer_refuses_a_program_compiled_for_another_scene() {
         )
         .expect_err("refused")
         .to_string();
-    assert!(err.contains("compiled without sampling"), "{err}");
+    assert!(
+        err.contains("sample_path kernel is not in this program"),
+        "{err}"
+    );
+
+    // A program holds the kernels it was compiled with and no others: one of trace_primary
+    // alone refuses an orthographic frame, which trace_primary_general traces.
+    let primary =
+        ClTracer::compile(&device, Some((Layout::Bin32, flat.depth)), Kernels::PRIMARY).unwrap();
+    for kernel in Kernel::ALL {
+        let made = ocl::core::create_kernel(primary.ocl(), kernel.name()).is_ok();
+        assert_eq!(made, kernel == Kernel::TracePrimary, "{}", kernel.name());
+    }
+    let mut tracer = ClTracer::bvh(&device, &primary, &flat).unwrap();
+    let shade = ShadeParams::new(Shade::Normal, &camera, &mesh.bounds());
+    assert!(
+        tracer
+            .render(&camera.pinhole(), 8, 8, &shade, false)
+            .is_ok()
+    );
+    let settings = CameraSettings {
+        projection: Some(Projection::Orthographic),
+        width: Some(8),
+        height: Some(8),
+        ..Default::default()
+    };
+    let ortho = Camera::from_settings(&settings, &mesh.bounds()).unwrap();
+    let err = tracer
+        .render(&ortho.pinhole(), 8, 8, &shade, false)
+        .expect_err("refused")
+        .to_string();
+    assert!(
+        err.contains("trace_primary_general kernel is not in this program"),
+        "{err}"
+    );
 }

@@ -33,7 +33,7 @@ fn images_larger_than_one_allocation_are_rendered_in_bands() {
         let program = ClTracer::compile(
             &device,
             Some((cltrace::bvh::Layout::Bin32, bvh.depth)),
-            true,
+            cltrace::device::Kernels::ALL,
         )
         .unwrap();
         let mut tracer = ClTracer::bvh(&device, &program, &bvh).unwrap();

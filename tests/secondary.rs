@@ -62,7 +62,7 @@ fn prepare(layout: Layout, two_sided_lights: bool) -> PrepareOptions {
         build: BuildOptions::default(),
         layout: Some(layout),
         work_group: None,
-        sampling: true,
+        kernels: cltrace::device::Kernels::ALL,
         crease_angle: None,
         two_sided_lights,
         lights: Default::default(),

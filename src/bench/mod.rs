@@ -18,7 +18,7 @@ use crate::bvh::Bin32Bvh;
 use crate::bvh::Layout;
 use crate::bvh::{BuildOptions, Bvh};
 use crate::camera::{Camera, CameraSettings, View};
-use crate::device::{ClDevice, DeviceSelector, list_devices};
+use crate::device::{ClDevice, DeviceSelector, Kernel, Kernels, list_devices};
 use crate::error::{Error, Result};
 use crate::geometry::Ray;
 use crate::input::MeshFormat;
@@ -378,7 +378,7 @@ fn run_into(
                         build: req.build,
                         layout: Some(layout),
                         work_group: None,
-                        sampling: false,
+                        kernels: Kernels::PRIMARY.with(Kernel::TraceRays),
                         // The protocol's primary ray is a closest-hit query, as the peers
                         // measure it: flat shading, no vertex normals interpolated (which
                         // cost the wide layouts 12% on the H200: docs/performance.md).
@@ -403,7 +403,7 @@ fn run_into(
                     // from their front face only, as the protocol compares renderers.
                     let mut path_timings = Timings::default();
                     let path_options = PrepareOptions {
-                        sampling: true,
+                        kernels: Kernels::PRIMARY.with(Kernel::SamplePath),
                         crease_angle: None,
                         lights: lights.clone(),
                         ..options.clone()

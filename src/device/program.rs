@@ -12,6 +12,7 @@ use std::ffi::CString;
 
 use ocl::core::ClDeviceIdPtr;
 
+use super::tracer::Kernels;
 use super::{CacheUse, ClDevice, first_line};
 use crate::bvh::Layout;
 use crate::error::{Error, Result};
@@ -274,13 +275,13 @@ fn one_build_at_a_time() -> std::sync::MutexGuard<'static, ()> {
 pub(crate) type BuiltPrograms = std::collections::HashMap<(String, String), ocl::Program>;
 
 /// A compiled tracing program and what it was compiled for: the BVH layout its kernels
-/// traverse (`None`: every triangle), and whether it holds the sampling kernels. A tracer
-/// refuses a program compiled for another scene.
+/// traverse (`None`: every triangle), and which kernels it holds. A tracer refuses a
+/// program compiled for another scene.
 #[derive(Clone, Debug)]
 pub struct Program {
     program: ocl::Program,
     layout: Option<Layout>,
-    sampling: bool,
+    kernels: Kernels,
     features: SurfaceFeatures,
     cache: Option<CacheUse>,
 }
@@ -296,9 +297,9 @@ impl Program {
         self.features
     }
 
-    /// Whether the program holds the progressive shade modes' kernels (cl/integrator.cl).
-    pub(crate) fn has_sampling(&self) -> bool {
-        self.sampling
+    /// The kernels the program holds.
+    pub fn kernels(&self) -> Kernels {
+        self.kernels
     }
 
     /// The OpenCL program.
@@ -313,17 +314,16 @@ impl Program {
 }
 
 impl ClDevice {
-    /// Compiles the tracing kernels, and with `sampling` the progressive shade modes too,
-    /// against a BVH in `layout` with a traversal stack of `stack_size` entries or, for
-    /// `None`, against every triangle. `extra_options` go after cltrace's own build options
-    /// (tests: `-cl-kernel-arg-info`).
+    /// Compiles `kernels` against a BVH in `layout` with a traversal stack of `stack_size`
+    /// entries or, for `None`, against every triangle. `extra_options` go after cltrace's
+    /// own build options (tests: `-cl-kernel-arg-info`).
     pub fn compile_program(
         &self,
         bvh: Option<(Layout, u32)>,
-        sampling: bool,
+        kernels: Kernels,
         extra_options: &str,
     ) -> Result<Program> {
-        self.compile_program_for(bvh, sampling, SurfaceFeatures::default(), extra_options)
+        self.compile_program_for(bvh, kernels, SurfaceFeatures::default(), extra_options)
     }
 
     /// [`ClDevice::compile_program`] for a scene whose surface has `features` (cut-out
@@ -331,10 +331,11 @@ impl ClDevice {
     pub fn compile_program_for(
         &self,
         bvh: Option<(Layout, u32)>,
-        sampling: bool,
+        kernels: Kernels,
         features: SurfaceFeatures,
         extra_options: &str,
     ) -> Result<Program> {
+        let sampling = kernels.has_sampling();
         let layout = bvh.map(|(layout, _)| layout);
         let mut defines = match bvh {
             Some((layout, stack_size)) => layout_defines(layout, stack_size),
@@ -358,14 +359,10 @@ impl ClDevice {
         if features.bsdfs || features.environment {
             defines.push("MIS".into());
         }
-        let kernels = if sampling {
-            "trace.cl + integrator.cl"
-        } else {
-            "trace.cl"
-        };
+        defines.extend(kernels.defines());
         let label = match layout {
-            Some(layout) => format!("{kernels} ({})", layout.name()),
-            None => format!("{kernels} (brute force)"),
+            Some(layout) => format!("{} ({})", kernels.names(), layout.name()),
+            None => format!("{} (brute force)", kernels.names()),
         };
         let options = self.build_options(&defines, extra_options);
         let source = program_source(&program_files(layout, sampling));
@@ -374,7 +371,7 @@ impl ClDevice {
             return Ok(Program {
                 program,
                 layout,
-                sampling,
+                kernels,
                 features,
                 cache: None,
             });
@@ -386,7 +383,7 @@ impl ClDevice {
                     return Ok(Program {
                         program,
                         layout,
-                        sampling,
+                        kernels,
                         features,
                         cache: Some(CacheUse::Hit(entry.path)),
                     });
@@ -406,7 +403,7 @@ impl ClDevice {
         Ok(Program {
             program,
             layout,
-            sampling,
+            kernels,
             features,
             cache: Some(cache),
         })

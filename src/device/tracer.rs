@@ -71,13 +71,23 @@ impl Kernel {
         }
     }
 
-    /// Whether the kernel is one of the progressive shade modes, in programs compiled with
-    /// sampling only.
+    /// Whether the kernel is one of the progressive shade modes (cl/integrator.cl).
     pub(crate) fn is_sampling(self) -> bool {
         matches!(
             self,
             Kernel::SampleAo | Kernel::SampleShadow | Kernel::SamplePath
         )
+    }
+
+    /// The progressive kernel of a shade mode; `None` for the single-hit modes.
+    pub fn sampling(shade: crate::render::Shade) -> Option<Kernel> {
+        use crate::render::Shade;
+        match shade {
+            Shade::Ao => Some(Kernel::SampleAo),
+            Shade::Shadow => Some(Kernel::SampleShadow),
+            Shade::Path => Some(Kernel::SamplePath),
+            _ => None,
+        }
     }
 
     /// The kernel's parameters in order, as the host binds them: the scene's (`bvh`: those
@@ -99,6 +109,74 @@ impl Kernel {
             }
         };
         [scene, own].concat()
+    }
+}
+
+/// The kernels one program holds (each kernel of the `cl/` files is compiled only where its
+/// `KERNEL_<NAME>` is defined). A run compiles those it uses: on the H200 a cold compile of
+/// every kernel with the dragon's path tracer took 4.2-5.2 s, `trace_primary` and
+/// `sample_path` alone 1.8-2.1 s (docs/bench/2026-12-04-first-image.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Kernels(u8);
+
+impl Kernels {
+    /// No kernel: what [`Kernels::with`] adds to.
+    pub const NONE: Kernels = Kernels(0);
+    /// `trace_primary` alone.
+    pub const PRIMARY: Kernels = Kernels::NONE.with(Kernel::TracePrimary);
+    /// The closest-hit kernels: both primary-ray kernels and `trace_rays`.
+    pub const TRACING: Kernels = Kernels::PRIMARY
+        .with(Kernel::TracePrimaryGeneral)
+        .with(Kernel::TraceRays);
+    /// Every kernel.
+    pub const ALL: Kernels = Kernels::TRACING
+        .with(Kernel::SampleAo)
+        .with(Kernel::SampleShadow)
+        .with(Kernel::SamplePath);
+
+    /// These and `kernel`.
+    pub const fn with(self, kernel: Kernel) -> Kernels {
+        Kernels(self.0 | 1 << kernel as u8)
+    }
+
+    /// These and `kernel` if there is one.
+    pub fn with_some(self, kernel: Option<Kernel>) -> Kernels {
+        kernel.map_or(self, |k| self.with(k))
+    }
+
+    /// Whether `kernel` is one of these.
+    pub fn contains(self, kernel: Kernel) -> bool {
+        self.0 & 1 << kernel as u8 != 0
+    }
+
+    /// Whether a progressive shade mode's kernel is among these (the program then needs
+    /// cl/integrator.cl and the files it uses).
+    pub fn has_sampling(self) -> bool {
+        self.iter().any(Kernel::is_sampling)
+    }
+
+    /// The kernels, in [`Kernel::ALL`]'s order.
+    pub fn iter(self) -> impl Iterator<Item = Kernel> {
+        Kernel::ALL.into_iter().filter(move |&k| self.contains(k))
+    }
+
+    /// The kernels' names, comma-separated.
+    pub(crate) fn names(self) -> String {
+        self.iter().map(Kernel::name).collect::<Vec<_>>().join(", ")
+    }
+
+    /// The kernels' build defines: `KERNEL_` and the kernel's name in capitals.
+    pub(crate) fn defines(self) -> Vec<String> {
+        self.iter()
+            .map(|k| format!("KERNEL_{}", k.name().to_uppercase()))
+            .collect()
+    }
+}
+
+impl Default for Kernels {
+    /// The closest-hit kernels.
+    fn default() -> Self {
+        Kernels::TRACING
     }
 }
 
@@ -459,8 +537,9 @@ pub struct ClTracer<'d> {
     program: Program,
     scene: Scene,
     lights: Option<DeviceLights>,
-    /// `trace_primary` and `trace_primary_general`, bound to the scene.
-    primary: [ocl::Kernel; 2],
+    /// `trace_primary` and, where the program holds it, `trace_primary_general`, bound to
+    /// the scene.
+    primary: [Option<ocl::Kernel>; 2],
     bands: BandPlanner,
     sample_bands: BandPlanner,
     /// The most bytes one output image may take: the device's largest allocation and an
@@ -500,34 +579,33 @@ impl BandPlanner {
 impl<'d> ClTracer<'d> {
     /// Compiles the kernels against a plain triangle list (brute force).
     pub fn compile_brute(device: &'d ClDevice) -> Result<Program> {
-        Self::compile(device, None, false)
+        Self::compile(device, None, Kernels::TRACING)
     }
 
     /// Compiles the kernels against a thesis-layout BVH, with a traversal stack as deep as
     /// the tree.
     pub fn compile_bvh(device: &'d ClDevice, depth: u32) -> Result<Program> {
-        Self::compile(device, Some((Layout::Bin32, depth)), false)
+        Self::compile(device, Some((Layout::Bin32, depth)), Kernels::TRACING)
     }
 
-    /// Compiles the tracing kernels, and with `sampling` the progressive shade modes too,
-    /// against a BVH in `layout` with a traversal stack of `stack_size` entries or, for
-    /// `None`, against every triangle.
+    /// Compiles `kernels` against a BVH in `layout` with a traversal stack of `stack_size`
+    /// entries or, for `None`, against every triangle.
     pub fn compile(
         device: &'d ClDevice,
         bvh: Option<(Layout, u32)>,
-        sampling: bool,
+        kernels: Kernels,
     ) -> Result<Program> {
-        device.compile_program(bvh, sampling, "")
+        device.compile_program(bvh, kernels, "")
     }
 
     /// [`ClTracer::compile`] for a scene whose surface has `features`.
     pub fn compile_for(
         device: &'d ClDevice,
         bvh: Option<(Layout, u32)>,
-        sampling: bool,
+        kernels: Kernels,
         features: SurfaceFeatures,
     ) -> Result<Program> {
-        device.compile_program_for(bvh, sampling, features, "")
+        device.compile_program_for(bvh, kernels, features, "")
     }
 
     /// Uploads the triangles (in file order) for the brute-force kernels.
@@ -1124,6 +1202,8 @@ impl<'d> ClTracer<'d> {
             false => (Kernel::TracePrimary, &self.primary[0]),
             true => (Kernel::TracePrimaryGeneral, &self.primary[1]),
         };
+        require_kernel(&self.program, kernel)?;
+        let k = k.as_ref().expect("the program's primary kernels are built");
         // The band (row0, row_end) changes from launch to launch.
         let mut band = BandParams::new(camera, width);
         let params = PrimaryParams {
@@ -1305,30 +1385,35 @@ fn check_program(program: &Program, layout: Option<Layout>) -> Result<()> {
     )))
 }
 
-/// Refuses a sampling kernel from a program compiled without sampling.
+/// Refuses a kernel the program was compiled without.
 fn require_kernel(program: &Program, kernel: Kernel) -> Result<()> {
-    if kernel.is_sampling() && !program.has_sampling() {
+    if !program.kernels().contains(kernel) {
         return Err(Error::Invalid(format!(
-            "the {} kernel is not in this program: it was compiled without sampling",
-            kernel.name()
+            "the {} kernel is not in this program: it was compiled with {} only",
+            kernel.name(),
+            program.kernels().names()
         )));
     }
     Ok(())
 }
 
-/// `trace_primary` and `trace_primary_general` for `scene`, the frame's values to be set by
-/// [`ClTracer::render`].
+/// `trace_primary` and `trace_primary_general` for `scene` where the program holds them, the
+/// frame's values to be set by [`ClTracer::render`].
 fn primary_kernels(
     device: &ClDevice,
     program: &Program,
     scene: &Scene,
-) -> Result<[ocl::Kernel; 2]> {
+) -> Result<[Option<ocl::Kernel>; 2]> {
     let build = |kernel: Kernel| {
+        if !program.kernels().contains(kernel) {
+            return Ok(None);
+        }
         let mut builder = kernel_builder(device, program, kernel, scene)?;
         BandParams::default().bind(&mut builder);
         PrimaryParams::default().bind(&mut builder);
         builder
             .build()
+            .map(Some)
             .map_err(|e| device.error(&format!("creating the {} kernel", kernel.name()), e))
     };
     Ok([

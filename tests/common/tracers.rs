@@ -4,7 +4,7 @@
 //! [`ClTracer::trace_rays`] and [`ClTracer::render`].
 
 use cltrace::bvh::{Bin32Bvh, BuildOptions, Bvh, DeviceLayout, Layout};
-use cltrace::device::{ClDevice, ClTracer};
+use cltrace::device::{ClDevice, ClTracer, Kernels};
 use cltrace::geometry::Ray;
 use cltrace::intersect::{ClosestHit, Triangle, triangles_in_order};
 use cltrace::mesh::Mesh;
@@ -59,7 +59,8 @@ impl DeviceTracer {
                 let sah = bvh.stats().sah_cost;
                 let laid = DeviceLayout::new(Bin32Bvh::new(bvh, mesh), layout, sah);
                 let program =
-                    ClTracer::compile(device, Some((layout, laid.stack_size)), false).unwrap();
+                    ClTracer::compile(device, Some((layout, laid.stack_size)), Kernels::TRACING)
+                        .unwrap();
                 ClTracer::with_layout(device, &program, &laid).unwrap()
             }
         }
