@@ -10,6 +10,7 @@
 //! host tracer answers.
 
 use bytemuck::{Pod, Zeroable};
+use rayon::prelude::*;
 
 use crate::geometry::Ray;
 use crate::mesh::Mesh;
@@ -78,10 +79,15 @@ pub const TRIANGLE_MASKED: u32 = 1;
 pub const TRIANGLE_TWO_SIDED: u32 = 2;
 
 /// The mesh's triangles in the order given (file order for brute force, leaf order for a
-/// BVH), each carrying its file-order index.
-pub fn triangles_in_order(mesh: &Mesh, order: impl IntoIterator<Item = u32>) -> Vec<Triangle> {
+/// BVH), each carrying its file-order index; made on every core.
+pub fn triangles_in_order<I>(mesh: &Mesh, order: I) -> Vec<Triangle>
+where
+    I: IntoParallelIterator<Item = u32>,
+    I::Iter: IndexedParallelIterator,
+{
     order
-        .into_iter()
+        .into_par_iter()
+        .with_min_len(4096)
         .map(|prim| Triangle::new(mesh.corners(prim as usize), prim))
         .collect()
 }

@@ -5,6 +5,7 @@
 //! boxes farther than the closest hit so far skipped.
 
 use bytemuck::{Pod, Zeroable};
+use rayon::prelude::*;
 
 use super::{Bvh, MAX_DEPTH};
 use crate::geometry::Ray;
@@ -66,7 +67,7 @@ impl Bin32Bvh {
     /// the order of [`Bvh::prim_order`] (materials all 0 until assigned).
     pub fn new(bvh: Bvh, mesh: &Mesh) -> Self {
         Bin32Bvh {
-            triangles: triangles_in_order(mesh, bvh.prim_order.iter().copied()),
+            triangles: triangles_in_order(mesh, bvh.prim_order.par_iter().copied()),
             nodes: bvh.nodes,
             depth: bvh.depth,
         }

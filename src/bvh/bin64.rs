@@ -3,6 +3,7 @@
 //! children, where the thesis's 32-byte node needs its two children fetched.
 
 use bytemuck::{Pod, Zeroable};
+use rayon::prelude::*;
 
 use super::{Bin32Bvh, Bin32Node};
 
@@ -48,7 +49,8 @@ pub(crate) fn to_bvh64(flat: &Bin32Bvh) -> Vec<Bin64Node> {
         }
     };
     nodes
-        .iter()
+        .par_iter()
+        .with_min_len(4096)
         .filter(|n| !n.is_leaf())
         .map(|n| {
             let (l, r) = (n.left_or_first as usize, n.right_or_count as usize);

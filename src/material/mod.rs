@@ -236,7 +236,8 @@ impl Materials {
     /// marks the triangles of masked materials, and the emitters when `two_sided_lights`.
     pub(crate) fn assign(&self, triangles: &mut [Triangle], two_sided_lights: bool) {
         use crate::intersect::{TRIANGLE_MASKED, TRIANGLE_TWO_SIDED};
-        for t in triangles {
+        use rayon::prelude::*;
+        triangles.par_iter_mut().with_min_len(4096).for_each(|t| {
             t.material = self.index_of(t.prim as usize);
             let m = &self.list[t.material as usize];
             t.flags = 0;
@@ -246,7 +247,7 @@ impl Materials {
             if two_sided_lights && m.emits() {
                 t.flags |= TRIANGLE_TWO_SIDED;
             }
-        }
+        });
     }
 
     /// One material for every triangle.
