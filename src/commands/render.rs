@@ -6,7 +6,7 @@ use super::Ending;
 use crate::bvh::BuildOptions;
 use crate::camera::Camera;
 use crate::camera::CameraSettings;
-use crate::device::{ClDevice, DeviceSelector};
+use crate::device::{ClDevice, DeviceSelector, Kernel, Kernels};
 use crate::error::Error;
 use crate::error::Result;
 use crate::geometry::Aabb;
@@ -491,11 +491,23 @@ fn render_with(
             .and_then(|path| crate::tune::TuneCache::load(path).get(&d.info).cloned()),
         _ => None,
     };
+    // The progressive modes trace their own camera rays: a frame of primary rays is traced
+    // for the single-hit modes and for hit records only (not for a part, whose image is the
+    // samples of its region).
+    let primary_frame = part.is_none() && (sampling.is_none() || req.hits.is_some());
+    // The kernels this frame uses: a cold compile costs about as much per kernel.
+    let general = shade.barycentrics || camera.pinhole().is_orthographic();
+    let kernels = match (primary_frame, general) {
+        (false, _) => Kernels::NONE,
+        (true, false) => Kernels::PRIMARY,
+        (true, true) => Kernels::PRIMARY.with(Kernel::TracePrimaryGeneral),
+    }
+    .with_some(sampling.and(Kernel::sampling(shade.shade)));
     let options_for = |tuned: Option<crate::tune::Tuning>| PrepareOptions {
         build: req.build,
         layout: render.layout.or(tuned.as_ref().map(|t| t.layout)),
         work_group: tuned.map(|t| t.work_group),
-        sampling: sampling.is_some(),
+        kernels,
         crease_angle: render.crease_angle,
         two_sided_lights: render.two_sided_lights.unwrap_or(false),
         lights: lights.clone(),
@@ -595,9 +607,8 @@ fn render_with(
             );
         }
     };
-    // A part has no frame of primary rays: its image is the samples of its region.
     let mut frame = Frame::new(camera.width, camera.height);
-    if part.is_none() {
+    if primary_frame {
         let start = std::time::Instant::now();
         let (primary, times) = renderers[0].render(&camera, &shade, v.progress())?;
         add_times(&mut timings, traced, elapsed_ms(start), &times);
@@ -678,8 +689,12 @@ fn render_with(
         summary.samples_per_pixel = Some(taken);
         summary.rays += acc.rays;
         if part.is_none() {
-            let radiance = timings.time("tone-map", || acc.radiance());
-            frame.colors = tone_map(&radiance, shade.shade);
+            let (radiance, colors) = timings.time("tone-map", || {
+                let radiance = acc.radiance();
+                let colors = tone_map(&radiance, shade.shade);
+                (radiance, colors)
+            });
+            frame.colors = colors;
             frame.radiance = Some(radiance);
         }
         accumulation = Some((acc, samples));
@@ -709,15 +724,23 @@ fn render_with(
             crate::output::part::write_part(&part, &req.output)
         })?;
         summary.outputs = vec![req.output.clone()];
+        let device = devices_named(&devices);
+        // What the renderers, the devices and the scene hold is given back as a stage
+        // of its own (NVIDIA's driver takes a while).
+        let start = std::time::Instant::now();
+        drop(renderers);
+        drop(devices);
+        drop((mesh, materials));
+        timings.add("release", elapsed_ms(start));
         return Ok(RenderOutcome {
             frame,
             method,
-            device: devices_named(&devices),
+            device,
             timings,
             summary,
         });
     }
-    if let Some(warning) = unlit_warning(&frame, &mesh, &camera, shade.shade) {
+    if let Some(warning) = unlit_warning(&frame, primary_frame, &mesh, &camera, shade.shade) {
         v.say(format!("warning: {warning}"));
     }
 
@@ -732,10 +755,16 @@ fn render_with(
         .chain(&req.hits)
         .cloned()
         .collect();
+    let device = devices_named(&devices);
+    let start = std::time::Instant::now();
+    drop(renderers);
+    drop(devices);
+    drop((mesh, materials));
+    timings.add("release", elapsed_ms(start));
     Ok(RenderOutcome {
         frame,
         method,
-        device: devices_named(&devices),
+        device,
         timings,
         summary,
     })
@@ -908,10 +937,45 @@ fn with_file_camera(
     }
 }
 
+/// The camera's primary hits, traced on the host through a BVH of `mesh`.
+fn host_camera_hits(mesh: &Mesh, camera: &Camera) -> Frame {
+    let bvh = crate::bvh::Bvh::build(mesh, &BuildOptions::default());
+    let flat = crate::bvh::Bin32Bvh::new(bvh, mesh);
+    let shade = ShadeParams::new(Shade::Depth, camera, &mesh.bounds());
+    let (w, h) = (camera.width, camera.height);
+    crate::render::cpu::render(&flat, &camera.pinhole(), w, h, &shade, None)
+}
+
 /// A warning when the image shows nothing: every camera ray missed, or (in the modes that
 /// gather light) no light reached any pixel. It says what the camera saw, since the usual
 /// cause is a camera placed outside a closed room, inside a closed mesh, or facing away.
-fn unlit_warning(frame: &Frame, mesh: &Mesh, camera: &Camera, shade: Shade) -> Option<String> {
+/// Without primary rays of the frame's own (`traced`: a progressive frame), a lit image
+/// (if only by the sky) gets no warning, and a dark one has its camera rays traced on the
+/// host to say what the camera saw.
+fn unlit_warning(
+    frame: &Frame,
+    traced: bool,
+    mesh: &Mesh,
+    camera: &Camera,
+    shade: Shade,
+) -> Option<String> {
+    let lit = match &frame.radiance {
+        Some(radiance) => radiance.iter().any(|p| p.iter().any(|&c| c > 0.0)),
+        None => true,
+    };
+    if lit && (!traced || frame.hits.iter().any(|h| h.prim != Hit::NONE.prim)) {
+        return None;
+    }
+    // A progressive frame without primary rays of its own: the host traces them, for this
+    // diagnosis only.
+    let host;
+    let frame = match traced {
+        true => frame,
+        false => {
+            host = host_camera_hits(mesh, camera);
+            &host
+        }
+    };
     let hits: Vec<usize> = (0..frame.hits.len())
         .filter(|&i| frame.hits[i].prim != Hit::NONE.prim)
         .collect();
@@ -929,10 +993,6 @@ fn unlit_warning(frame: &Frame, mesh: &Mesh, camera: &Camera, shade: Shade) -> O
             bounds.max.to_array()
         ));
     }
-    let lit = match &frame.radiance {
-        Some(radiance) => radiance.iter().any(|p| p.iter().any(|&c| c > 0.0)),
-        None => true,
-    };
     if lit {
         return None;
     }

@@ -677,7 +677,12 @@ impl Accumulation {
 
     /// Mean radiance per pixel of the region (black where no sample was taken).
     pub fn radiance(&self) -> Vec<[f32; 3]> {
-        self.pixels.iter().map(mean_radiance).collect()
+        use rayon::prelude::*;
+        self.pixels
+            .par_iter()
+            .with_min_len(4096)
+            .map(mean_radiance)
+            .collect()
     }
 }
 
