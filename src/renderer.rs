@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use crate::brute::BruteForce;
 use crate::bvh::{Bin32Bvh, Bin32Node, BuildOptions, Bvh, BvhStats, DeviceLayout, Layout};
 use crate::camera::Camera;
-use crate::device::{ClDevice, ClTracer, Kernels, default_layout};
+use crate::device::{ClDevice, ClTracer, Kernels, Program, default_layout};
 use crate::error::Result;
 use crate::geometry::Ray;
 use crate::intersect::{ClosestHit, Triangle, triangles_in_order};
@@ -91,11 +91,14 @@ impl<'d> Renderer<'d> {
         device: Option<&'d ClDevice>,
         timings: &mut Timings,
     ) -> Result<Self> {
-        let built = Self::build(method, mesh, materials, options, timings);
-        let surface = Self::surface(mesh, materials, options, timings);
-        Self::prepare_built(
-            method, mesh, materials, options, built, surface, device, timings,
-        )
+        std::thread::scope(|s| {
+            let program = compile_meanwhile(s, method, mesh, materials, options, device);
+            let built = Self::build(method, mesh, materials, options, timings);
+            let surface = Self::surface(mesh, materials, options, timings);
+            Self::prepare_built(
+                method, mesh, materials, options, built, surface, device, program, timings,
+            )
+        })
     }
 
     /// [`Renderer::prepare`] for each of several devices, the BVH and the surface data
@@ -110,13 +113,21 @@ impl<'d> Renderer<'d> {
         devices: &[&'d ClDevice],
         timings: &mut Timings,
     ) -> Result<Vec<Self>> {
-        let built = Self::build(method, mesh, materials, &options[0], timings);
-        let surface = Self::surface(mesh, materials, &options[0], timings);
         let prepared: Vec<(Result<Self>, Timings)> = std::thread::scope(|s| {
-            let threads: Vec<_> = devices
+            let programs: Vec<_> = devices
                 .iter()
                 .zip(options)
                 .map(|(&device, options)| {
+                    compile_meanwhile(s, method, mesh, materials, options, Some(device))
+                })
+                .collect();
+            let built = Self::build(method, mesh, materials, &options[0], timings);
+            let surface = Self::surface(mesh, materials, &options[0], timings);
+            let threads: Vec<_> = devices
+                .iter()
+                .zip(options)
+                .zip(programs)
+                .map(|((&device, options), program)| {
                     let (built, surface) = (built.clone(), surface.clone());
                     s.spawn(move || {
                         let mut own = Timings::default();
@@ -128,6 +139,7 @@ impl<'d> Renderer<'d> {
                             built,
                             surface,
                             Some(device),
+                            program,
                             &mut own,
                         );
                         (renderer, own)
@@ -205,14 +217,10 @@ impl<'d> Renderer<'d> {
         built: Option<(Bin32Bvh, BvhStats)>,
         surface: Surface,
         device: Option<&'d ClDevice>,
+        program: impl FnOnce(SurfaceFeatures) -> Result<Program>,
         timings: &mut Timings,
     ) -> Result<Self> {
-        let kernels = options.kernels;
-        let features = SurfaceFeatures {
-            environment: options.lights.environment.is_some(),
-            punctual: !options.lights.punctual.is_empty(),
-            ..surface.features()
-        };
+        let features = lit_features(surface.features(), options);
         let (flat, mut bvh) = match built {
             Some((flat, stats)) => (Some(flat), Some(stats)),
             None => (None, None),
@@ -246,9 +254,7 @@ impl<'d> Renderer<'d> {
             }
             (Method::ClBrute, _) => {
                 let device = device();
-                let program = timings.time("compile", || {
-                    ClTracer::compile_for(device, None, kernels, features)
-                })?;
+                let program = timings.time("compile", || program(features))?;
                 let triangles = all();
                 let emitters =
                     timings.time("lights", || Emitters::new(&triangles, &materials.list));
@@ -274,10 +280,7 @@ impl<'d> Renderer<'d> {
                 // After the layout: the compressed one reorders the triangles.
                 let emitters =
                     timings.time("lights", || Emitters::new(&laid.triangles, &materials.list));
-                let program = timings.time("compile", || {
-                    let bvh = Some((laid.layout, laid.stack_size));
-                    ClTracer::compile_for(device, bvh, kernels, features)
-                })?;
+                let program = timings.time("compile", || program(features))?;
                 let tracer = timings.time("upload", || -> Result<ClTracer> {
                     let mut t = ClTracer::with_layout(device, &program, &laid)?;
                     t.set_surface(&surface)?;
@@ -539,4 +542,55 @@ fn mrays(start: std::time::Instant, rays: u64) -> String {
         "{:.1} Mrays/s",
         rays as f64 / start.elapsed().as_secs_f64() / 1e6
     )
+}
+
+/// The features the kernels are compiled for: the surface's, and the lights'.
+fn lit_features(surface: SurfaceFeatures, options: &PrepareOptions) -> SurfaceFeatures {
+    SurfaceFeatures {
+        environment: options.lights.environment.is_some(),
+        punctual: !options.lights.punctual.is_empty(),
+        ..surface
+    }
+}
+
+/// Starts compiling the kernels of an OpenCL `method` on `device` in `scope` while the
+/// tree and the surface are built: a program depends on the layout, its largest stack
+/// ([`Layout::max_stack_size`]), the kernels, the lights and the surface's features, which
+/// are known before the smooth normals are computed. What it returns gives the program
+/// once the surface's features are known: the one started, or where those turned out
+/// otherwise (they should not), one compiled then.
+fn compile_meanwhile<'s, 'd: 's>(
+    scope: &'s std::thread::Scope<'s, '_>,
+    method: Method,
+    mesh: &Mesh,
+    materials: &Materials,
+    options: &PrepareOptions,
+    device: Option<&'d ClDevice>,
+) -> impl FnOnce(SurfaceFeatures) -> Result<Program> + Send + 's {
+    let crease = options.crease_angle.unwrap_or(DEFAULT_CREASE_ANGLE);
+    let expected = lit_features(
+        SurfaceFeatures::before_normals(mesh, materials, crease),
+        options,
+    );
+    let bvh = match (method, device) {
+        (Method::ClBvh, Some(device)) => {
+            let layout = options
+                .layout
+                .unwrap_or_else(|| default_layout(&device.info));
+            Some((layout, layout.max_stack_size()))
+        }
+        _ => None,
+    };
+    let kernels = options.kernels;
+    let compile = move |features| {
+        let device = device.expect("OpenCL methods are given a device");
+        ClTracer::compile_for(device, bvh, kernels, features)
+    };
+    let started = method
+        .uses_opencl()
+        .then(|| scope.spawn(move || compile(expected)));
+    move |features| match started {
+        Some(handle) if features == expected => handle.join().expect("compiling does not panic"),
+        _ => compile(features),
+    }
 }

@@ -124,6 +124,56 @@ fn a_second_run_compiled_its_kernels_again() {
     assert_eq!(entries(&cache).len(), 2);
 }
 
+/// A scene whose tree was deeper or shallower than the last one's compiled its kernels
+/// again: programs were compiled for the tree's own stack. They take the layout's largest
+/// now, so a new scene of the same layout and surface finds them in the cache.
+#[test]
+fn a_new_scene_of_the_same_layout_compiled_its_kernels_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("kernels");
+    let mut depths = Vec::new();
+    for (name, subdivisions) in [("coarse", 1), ("fine", 5)] {
+        let scene = dir.path().join(format!("{name}.toml"));
+        let toml = format!(
+            "[[mesh]]\ngenerator = {{ kind = \"sphere\", subdivisions = {subdivisions} }}\n"
+        );
+        std::fs::write(&scene, toml).unwrap();
+        let mut cmd = cltrace();
+        cmd.current_dir(dir.path())
+            .env("CLTRACE_KERNEL_CACHE", &cache)
+            .arg("render")
+            .arg(&scene)
+            .args(["--method", "cl-bvh", "--shade", "path", "--spp", "1", "-v"])
+            .args(["--width", "16", "--height", "12", "-o", "out.png"]);
+        let out = run(cmd);
+        succeeded(&out);
+        let stderr = text(&out.stderr);
+        let depth = stderr
+            .lines()
+            .find_map(|l| {
+                l.strip_prefix("bvh: ")?
+                    .split(", depth ")
+                    .nth(1)?
+                    .split(',')
+                    .next()
+            })
+            .unwrap_or_else(|| panic!("no bvh line: {stderr}"))
+            .to_string();
+        depths.push(depth);
+        let cached = stderr.lines().find(|l| l.starts_with("program cache: "));
+        let expected = match name {
+            "coarse" => "program cache: compiled",
+            _ => "program cache: hit",
+        };
+        assert!(
+            cached.is_some_and(|l| l.starts_with(expected)),
+            "{name}: {stderr}"
+        );
+    }
+    assert_ne!(depths[0], depths[1], "the trees differ in depth");
+    assert_eq!(entries(&cache).len(), 1);
+}
+
 /// A cache folder that takes no file costs only the compile; `off` turns the cache off.
 #[test]
 fn a_cache_that_cannot_be_written_does_not_fail_the_render() {

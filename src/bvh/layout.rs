@@ -3,7 +3,7 @@
 //! the CLI, its node type and its kernel file name it.
 
 use super::bin32::Bin32Bvh;
-use super::{bin64, cwbvh, wide, wide4, wide8};
+use super::{MAX_DEPTH, bin64, cwbvh, wide, wide4, wide8};
 use crate::intersect::Triangle;
 
 /// The device layouts `--layout` chooses among.
@@ -67,6 +67,26 @@ impl Layout {
     pub(crate) fn define(self) -> String {
         format!("LAYOUT_{}", self.name().to_ascii_uppercase())
     }
+
+    /// The traversal stack entries a tree of this layout `depth` levels deep needs: the
+    /// depth for binary layouts, (width - 1) per level of a wide tree, one per level of a
+    /// compressed one (a node's unvisited children share one entry).
+    pub fn stack_size(self, depth: u32) -> u32 {
+        match self {
+            Layout::Bin32 | Layout::Bin64 => depth,
+            Layout::Wide4 => 3 * depth + 1,
+            Layout::Wide8 => 7 * depth + 1,
+            Layout::Cwbvh => depth + 1,
+        }
+    }
+
+    /// The stack entries any tree of this layout needs ([`MAX_DEPTH`] levels): programs are
+    /// compiled with it, so that they serve every scene of the layout and can compile
+    /// before the tree is built. On the H200 and PoCL-16 it traced as fast as the tree's
+    /// own size (docs/bench/2026-12-04-first-image.md).
+    pub fn max_stack_size(self) -> u32 {
+        self.stack_size(MAX_DEPTH)
+    }
 }
 
 impl std::str::FromStr for Layout {
@@ -87,9 +107,7 @@ pub struct DeviceLayout {
     pub(crate) nodes: Vec<u8>,
     pub(crate) node_count: usize,
     pub(crate) triangles: Vec<Triangle>,
-    /// Entries the traversal stack needs: the depth for binary layouts, (width - 1) per
-    /// level of a wide tree, one per level of a compressed one (a node's unvisited children
-    /// share one entry).
+    /// Entries the traversal stack needs ([`Layout::stack_size`] of the tree's depth).
     pub stack_size: u32,
     /// The SAH cost of the tree as laid out (wide nodes count one traversal step each).
     pub(crate) sah_cost: f64,
@@ -105,19 +123,24 @@ impl DeviceLayout {
             Layout::Bin32 => (
                 bytemuck::cast_slice(&flat.nodes).to_vec(),
                 flat.nodes.len(),
-                depth,
+                layout.stack_size(depth),
                 sah_cost,
             ),
             Layout::Bin64 => {
                 let n = bin64::to_bvh64(&flat);
-                (bytemuck::cast_slice(&n).to_vec(), n.len(), depth, sah_cost)
+                (
+                    bytemuck::cast_slice(&n).to_vec(),
+                    n.len(),
+                    layout.stack_size(depth),
+                    sah_cost,
+                )
             }
             Layout::Wide4 => {
                 let c = wide::collapse::<wide4::Wide4Node>(&flat);
                 (
                     bytemuck::cast_slice(&c.nodes).to_vec(),
                     c.nodes.len(),
-                    3 * c.depth + 1,
+                    layout.stack_size(c.depth),
                     c.sah_cost,
                 )
             }
@@ -126,7 +149,7 @@ impl DeviceLayout {
                 (
                     bytemuck::cast_slice(&c.nodes).to_vec(),
                     c.nodes.len(),
-                    7 * c.depth + 1,
+                    layout.stack_size(c.depth),
                     c.sah_cost,
                 )
             }
@@ -136,7 +159,7 @@ impl DeviceLayout {
                 (
                     bytemuck::cast_slice(&c.nodes).to_vec(),
                     c.nodes.len(),
-                    c.depth + 1,
+                    layout.stack_size(c.depth),
                     c.sah_cost,
                 )
             }

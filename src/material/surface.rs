@@ -38,6 +38,30 @@ pub struct SurfaceFeatures {
     /// Point, spot or directional lights (`PUNCTUAL`, cl/punctual.cl); set as `environment`.
     pub punctual: bool,
 }
+impl SurfaceFeatures {
+    /// The features of a surface with `materials` and, or without, vertex normals (the
+    /// environment and punctual lights left off).
+    fn of(materials: &[Material], normals: bool) -> SurfaceFeatures {
+        SurfaceFeatures {
+            masks: materials.iter().any(Material::is_masked),
+            normals,
+            bsdfs: materials
+                .iter()
+                .any(|m| m.bsdf != crate::material::Bsdf::Diffuse.code() || m.metallic > 0.0),
+            environment: false,
+            punctual: false,
+        }
+    }
+
+    /// The features of the [`Surface`] made of `mesh` and `materials` once smooth normals
+    /// are filled in with `crease_degrees` ([`Mesh::fill_normals`]), known before they are
+    /// computed: the kernels can compile meanwhile.
+    pub fn before_normals(mesh: &Mesh, materials: &Materials, crease_degrees: f32) -> Self {
+        let normals = !mesh.normals.is_empty() || crease_degrees > 0.0;
+        SurfaceFeatures::of(&materials.list, normals)
+    }
+}
+
 /// [`Surface::flags`] bit: the vertices have texture coordinates.
 pub const SURFACE_UVS: u32 = 2;
 /// [`Surface::flags`] bit: the vertices have colours.
@@ -150,16 +174,7 @@ impl Surface {
 
     /// What of this surface the kernels must be compiled for.
     pub fn features(&self) -> SurfaceFeatures {
-        SurfaceFeatures {
-            masks: self.has_masks(),
-            normals: self.flags & SURFACE_NORMALS != 0,
-            bsdfs: self
-                .materials
-                .iter()
-                .any(|m| m.bsdf != crate::material::Bsdf::Diffuse.code() || m.metallic > 0.0),
-            environment: false,
-            punctual: false,
-        }
+        SurfaceFeatures::of(&self.materials, self.flags & SURFACE_NORMALS != 0)
     }
 
     /// Bytes the kernels' surface buffers take on the device.
