@@ -12,6 +12,7 @@ texels, or a constant) and point, spot and directional lights.
     compare.py scenes    --out DIR                       the cltrace inputs only
     compare.py reference --out DIR [--spp N] [--size WxH] inputs + Mitsuba references
     compare.py check     --cltrace BIN --refs DIR [--spp N]
+    compare.py speed     --cltrace BIN [--devices D,D] [--variant V]   samples/s, both renderers
 
 `scenes` needs only numpy; `reference` needs Mitsuba (scripts/mitsuba/setup.sh installs it),
 and so does `check`, which reads the EXR files through Mitsuba's Bitmap. The tolerance and
@@ -739,14 +740,14 @@ def mitsuba_bsdf(m):
 # Mitsuba.
 
 
-def mitsuba():
+def mitsuba(variant=MITSUBA_VARIANT):
     import mitsuba as mi
 
-    mi.set_variant(MITSUBA_VARIANT)
+    mi.set_variant(variant)
     return mi
 
 
-def mitsuba_scene(mi, scene, out, width, height, spp, max_bounces):
+def mitsuba_scene(mi, scene, out, width, height, spp, max_bounces, rr_depth=10000):
     cam = scene["camera"]
     d = {
         "type": "scene",
@@ -755,7 +756,8 @@ def mitsuba_scene(mi, scene, out, width, height, spp, max_bounces):
             # cltrace's bounce 0 is the camera ray's hit with its light sample (NEE); Mitsuba's
             # depth 1 is the emitters seen directly, depth 2 adds that first NEE.
             "max_depth": max_bounces + 2,
-            "rr_depth": 10000,
+            # None by default (the references' noise only); `speed` starts it where cltrace does.
+            "rr_depth": rr_depth,
             "hide_emitters": False,
         },
         "sensor": {
@@ -1089,6 +1091,61 @@ def cmd_check(args):
     print("every region agrees within the tolerance")
 
 
+# cltrace's Russian roulette starts after the BSDF sample of bounce ROULETTE_AFTER = 3
+# (src/render/integrator.rs); Mitsuba's after the BSDF sample that makes its depth rr_depth,
+# depth 1 being the camera ray's hit: the same vertex is rr_depth 4.
+RR_DEPTH_OF_CLTRACE = 4
+
+
+def cmd_speed(args):
+    """Samples per second of both renderers on the same scenes at equal settings: image
+    size, spp, path length, Russian roulette from the same vertex, box filter, one-sided
+    emitters. Mitsuba's time is mi.render's after a first render (its JIT compile) of the
+    same size and spp; cltrace's the samples stage of `render --json` (its `sampling_ms`)
+    after a first run (the kernel compile). Medians of --repetitions."""
+    mi = mitsuba(args.variant)
+    import drjit as dr
+
+    w, h = parse_size(args.size)
+    rows = []
+    for name in selected(args.scenes):
+        scene = SCENES[name]()
+        scene["max_bounces"] = args.max_bounces
+        out = os.path.join(args.out, name)
+        write_inputs(scene, out, w, h, args.spp)
+        loaded = mitsuba_scene(mi, scene, out, w, h, args.spp, args.max_bounces, RR_DEPTH_OF_CLTRACE)
+        times = []
+        for k in range(args.repetitions + 1):
+            start = time.perf_counter()
+            img = mi.render(loaded, spp=args.spp, seed=k)
+            dr.eval(img)
+            np.array(img)
+            if k > 0:
+                times.append(time.perf_counter() - start)
+        samples = w * h * args.spp
+        rows.append((name, f"Mitsuba {mi.__version__} {args.variant}", samples / np.median(times) / 1e6))
+        for device in args.devices.split(","):
+            times = []
+            for k in range(args.repetitions + 1):
+                summary = os.path.join(out, "run.json")
+                cmd = [args.cltrace, "render", os.path.join(out, "scene.toml"), "-q", "--device", device,
+                       "--max-bounces", str(args.max_bounces), "-o", os.path.join(out, "speed.exr"),
+                       "--json", summary]
+                subprocess.run(cmd, check=True)
+                with open(summary) as f:
+                    run = json.load(f)
+                if k > 0:
+                    times.append(run["sampling_ms"] / 1e3)
+            rows.append((name, f"cltrace {run['device']}", samples / np.median(times) / 1e6))
+    print(f"{w}x{h}, {args.spp} spp, {args.max_bounces} bounces ({args.max_bounces + 2} segments), "
+          f"Russian roulette after bounce 3, median of {args.repetitions}")
+    print("| scene | renderer | Msamples/s | of Mitsuba's |")
+    print("|---|---|---:|---:|")
+    for name, who, rate in rows:
+        base = next(r for n, wh, r in rows if n == name and wh.startswith("Mitsuba"))
+        print(f"| {name} | {who} | {rate:.3f} | {rate / base:.2f}x |")
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="command", required=True)
@@ -1112,6 +1169,18 @@ def main():
     c.add_argument("--spp", type=int, default=1024, help="cltrace's samples per pixel, both halves")
     c.add_argument("--scenes", help="comma-separated names (default: all found)")
     c.set_defaults(run=cmd_check)
+    v = sub.add_parser("speed", help="samples per second of both renderers at equal settings")
+    v.add_argument("--cltrace", required=True, help="the cltrace binary")
+    v.add_argument("--devices", default="Portable Computing Language",
+                   help="cltrace's devices (--device selectors), comma-separated, each measured")
+    v.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba's variant (llvm_ad_rgb, cuda_ad_rgb)")
+    v.add_argument("--out", default=os.path.join(tempfile.gettempdir(), "cltrace-speed"))
+    v.add_argument("--size", default="512x512")
+    v.add_argument("--spp", type=int, default=64)
+    v.add_argument("--max-bounces", type=int, default=8, help="cltrace's count; Mitsuba's max_depth is 2 more")
+    v.add_argument("--scenes", default="cornell,gold,glass")
+    v.add_argument("--repetitions", type=int, default=3)
+    v.set_defaults(run=cmd_speed)
     args = p.parse_args()
     args.run(args)
 

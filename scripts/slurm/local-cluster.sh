@@ -2,9 +2,10 @@
 # A one-node Slurm cluster on this machine (127.0.0.1), without systemd, for CI and for
 # trying the job scripts out: `start` installs Debian's slurm-wlm and munge if they are
 # missing, writes slurm.conf into a state folder, starts munged, slurmctld and slurmd and
-# waits until the node is idle; `stop` ends the daemons it started, by their PIDs.
+# waits until the node is idle; `stop` ends the daemons it started, by their PIDs; `install`
+# only installs the packages.
 #
-#   scripts/slurm/local-cluster.sh start|stop|status|env
+#   scripts/slurm/local-cluster.sh install|start|stop|status|env
 #
 # As root. The clients need SLURM_CONF pointing at the state folder's slurm.conf:
 # `eval "$(scripts/slurm/local-cluster.sh env)"` sets it.
@@ -221,12 +222,13 @@ status() {
 }
 
 case "${1:-}" in
+install) install_packages ;;
 start) start ;;
 stop) stop ;;
 status) status ;;
 env) printf 'export SLURM_CONF=%q\n' "$CONF" ;;
 *)
-    echo "usage: $0 start|stop|status|env" >&2
+    echo "usage: $0 install|start|stop|status|env" >&2
     exit 2
     ;;
 esac
