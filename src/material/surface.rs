@@ -62,6 +62,20 @@ impl SurfaceFeatures {
     }
 }
 
+/// The parts of `items` one after the other (millions of them: on every core).
+fn flat<T: Sync, C: Copy + Default + Send + Sync, const N: usize>(
+    items: &[T],
+    parts: impl Fn(&T) -> [C; N] + Sync,
+) -> Vec<C> {
+    use rayon::prelude::*;
+    let mut out = vec![C::default(); N * items.len()];
+    out.par_chunks_mut(N)
+        .zip(items.par_iter())
+        .with_min_len(4096)
+        .for_each(|(o, i)| o.copy_from_slice(&parts(i)));
+    out
+}
+
 /// [`Surface::flags`] bit: the vertices have texture coordinates.
 pub const SURFACE_UVS: u32 = 2;
 /// [`Surface::flags`] bit: the vertices have colours.
@@ -157,11 +171,11 @@ impl Surface {
             materials: materials.list.clone(),
             corners: match flags {
                 0 => Vec::new(),
-                _ => mesh.triangles.iter().flatten().copied().collect(),
+                _ => flat(&mesh.triangles, |t| *t),
             },
-            normals: mesh.normals.iter().flat_map(|n| n.to_array()).collect(),
-            uvs: mesh.uvs.iter().flat_map(|t| t.to_array()).collect(),
-            colors: mesh.colors.iter().flat_map(|c| c.to_array()).collect(),
+            normals: flat(&mesh.normals, |n| n.to_array()),
+            uvs: flat(&mesh.uvs, |t| t.to_array()),
+            colors: flat(&mesh.colors, |c| c.to_array()),
             textures: DeviceTextures::new(&materials.textures),
             flags,
         }

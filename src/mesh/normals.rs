@@ -109,29 +109,77 @@ impl Mesh {
             let v = vertex(c);
             (self.normals[v as usize] == Vec3::ZERO).then_some(v)
         });
+        let normal_of = &normal_of;
         let bits = |c: u32| normal_of[c as usize].to_array().map(f32::to_bits);
-        for v in 0..n as u32 {
-            let corners = by_vertex.bucket_mut(v);
-            if corners.is_empty() {
-                continue;
-            }
-            corners.sort_unstable_by_key(|&c| (bits(c), c));
-            let mut index = v;
-            self.normals[v as usize] = normal_of[corners[0] as usize];
-            for k in 0..corners.len() {
-                let c = corners[k];
-                if k > 0 && bits(c) != bits(corners[k - 1]) {
-                    index = self.positions.len() as u32;
-                    self.positions.push(self.positions[v as usize]);
-                    self.normals.push(normal_of[c as usize]);
-                    if !self.uvs.is_empty() {
-                        self.uvs.push(self.uvs[v as usize]);
-                    }
-                    if !self.colors.is_empty() {
-                        self.colors.push(self.colors[v as usize]);
+        // Each vertex's corners by normal, and each vertex's copies: one per normal after
+        // its first.
+        let mut slices = by_vertex.split_mut();
+        let copies: Vec<u32> = slices
+            .par_iter_mut()
+            .with_min_len(1024)
+            .map(|corners| {
+                corners.sort_unstable_by_key(|&c| (bits(c), c));
+                corners
+                    .windows(2)
+                    .filter(|w| bits(w[0]) != bits(w[1]))
+                    .count() as u32
+            })
+            .collect();
+        let by_vertex = &by_vertex;
+        let mut first_copy = Vec::with_capacity(n);
+        let mut next = n as u32;
+        for &k in &copies {
+            first_copy.push(next);
+            next += k;
+        }
+        // Each corner's vertex: its own for its vertex's first normal, else that normal's copy.
+        let distinct_before = |v: u32, c: u32| {
+            let corners = by_vertex.bucket(v);
+            let at = corners.partition_point(|&d| (bits(d), d) < (bits(c), c));
+            corners[..=at]
+                .windows(2)
+                .filter(|w| bits(w[0]) != bits(w[1]))
+                .count() as u32
+        };
+        let normals_given = |v: u32| !by_vertex.bucket(v).is_empty();
+        self.triangles
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(t, tri)| {
+                for (k, v) in tri.iter_mut().enumerate() {
+                    if normals_given(*v) {
+                        match distinct_before(*v, (3 * t + k) as u32) {
+                            0 => {}
+                            r => *v = first_copy[*v as usize] + r - 1,
+                        }
                     }
                 }
-                self.triangles[c as usize / 3][c as usize % 3] = index;
+            });
+        // The first normal of each vertex, then the copies in order.
+        self.normals
+            .par_iter_mut()
+            .zip(by_vertex.split())
+            .filter(|(_, corners)| !corners.is_empty())
+            .for_each(|(normal, corners)| *normal = normal_of[corners[0] as usize]);
+        let extra: Vec<(u32, Vec3)> = (0..n as u32)
+            .into_par_iter()
+            .with_min_len(1024)
+            .flat_map_iter(|v| {
+                let corners = by_vertex.bucket(v);
+                corners
+                    .windows(2)
+                    .filter(|w| bits(w[0]) != bits(w[1]))
+                    .map(move |w| (v, normal_of[w[1] as usize]))
+            })
+            .collect();
+        for (v, normal) in extra {
+            self.positions.push(self.positions[v as usize]);
+            self.normals.push(normal);
+            if !self.uvs.is_empty() {
+                self.uvs.push(self.uvs[v as usize]);
+            }
+            if !self.colors.is_empty() {
+                self.colors.push(self.colors[v as usize]);
             }
         }
     }
@@ -155,9 +203,13 @@ fn position_groups(positions: &[Vec3]) -> (Vec<u32>, u32) {
 
 /// Items `0..count` sorted into `buckets` buckets by `bucket_of` (`None`: in none), each
 /// bucket in ascending order: a counting sort.
-fn bucket(count: u32, buckets: u32, bucket_of: impl Fn(u32) -> Option<u32>) -> Buckets {
+fn bucket(count: u32, buckets: u32, bucket_of: impl Fn(u32) -> Option<u32> + Sync) -> Buckets {
     let mut start = vec![0u32; buckets as usize + 1];
-    let of: Vec<Option<u32>> = (0..count).map(&bucket_of).collect();
+    let of: Vec<Option<u32>> = (0..count)
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(&bucket_of)
+        .collect();
     for b in of.iter().flatten() {
         start[*b as usize + 1] += 1;
     }
@@ -186,9 +238,26 @@ impl Buckets {
         &self.items[self.start[b as usize] as usize..self.start[b as usize + 1] as usize]
     }
 
+    /// Every bucket, in order.
+    fn split(&self) -> impl IndexedParallelIterator<Item = &[u32]> {
+        (0..self.start.len() as u32 - 1)
+            .into_par_iter()
+            .map(|b| self.bucket(b))
+    }
+
+    /// Every bucket, in order, to change in place.
+    fn split_mut(&mut self) -> Vec<&mut [u32]> {
+        let (start, items) = (&self.start, &mut self.items);
+        Self::cut(start, items)
+    }
+
     /// `out` (as long as the items) cut into one slice per bucket.
-    fn split_like<'a, T>(&self, mut out: &'a mut [T]) -> Vec<&'a mut [T]> {
-        self.start
+    fn split_like<'a, T>(&self, out: &'a mut [T]) -> Vec<&'a mut [T]> {
+        Self::cut(&self.start, out)
+    }
+
+    fn cut<'a, T>(start: &[u32], mut out: &'a mut [T]) -> Vec<&'a mut [T]> {
+        start
             .windows(2)
             .map(|w| {
                 let (bucket, rest) = std::mem::take(&mut out).split_at_mut((w[1] - w[0]) as usize);
@@ -196,10 +265,6 @@ impl Buckets {
                 bucket
             })
             .collect()
-    }
-
-    fn bucket_mut(&mut self, b: u32) -> &mut [u32] {
-        &mut self.items[self.start[b as usize] as usize..self.start[b as usize + 1] as usize]
     }
 }
 
