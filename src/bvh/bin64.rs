@@ -31,15 +31,30 @@ pub(crate) fn to_bvh64(flat: &Bin32Bvh) -> Vec<Bin64Node> {
     if root.is_leaf() {
         return vec![pair(root, root, 0, 0)];
     }
-    // Inner nodes keep their depth-first order; number them.
-    let mut index = vec![u32::MAX; nodes.len()];
-    let mut count = 0u32;
-    for (i, n) in nodes.iter().enumerate() {
-        if !n.is_leaf() {
-            index[i] = count;
-            count += 1;
-        }
+    // Inner nodes keep their depth-first order; number them: a count of the inner nodes
+    // before each chunk, then each chunk on its own core.
+    const CHUNK: usize = 1 << 16;
+    let mut before: Vec<u32> = nodes
+        .par_chunks(CHUNK)
+        .map(|c| c.iter().filter(|n| !n.is_leaf()).count() as u32)
+        .collect();
+    let mut sum = 0;
+    for b in &mut before {
+        (*b, sum) = (sum, sum + *b);
     }
+    let mut index = vec![u32::MAX; nodes.len()];
+    index
+        .par_chunks_mut(CHUNK)
+        .zip(nodes.par_chunks(CHUNK))
+        .zip(before)
+        .for_each(|((index, nodes), mut count)| {
+            for (i, n) in index.iter_mut().zip(nodes) {
+                if !n.is_leaf() {
+                    *i = count;
+                    count += 1;
+                }
+            }
+        });
     let reference = |i: usize| {
         let n = &nodes[i];
         if n.is_leaf() {

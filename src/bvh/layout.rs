@@ -98,13 +98,49 @@ impl std::str::FromStr for Layout {
     }
 }
 
+/// The nodes of a tree in one layout, kept in their own type (not copied into bytes: a
+/// scene of hundreds of millions of triangles has gigabytes of them).
+#[derive(Clone)]
+pub(crate) enum Nodes {
+    Bin32(Vec<super::Bin32Node>),
+    Bin64(Vec<bin64::Bin64Node>),
+    Wide4(Vec<wide4::Wide4Node>),
+    Wide8(Vec<wide8::Wide8Node>),
+    Cwbvh(Vec<cwbvh::CwbvhNode>),
+}
+
+impl Nodes {
+    /// The nodes' bytes, as the kernels read them.
+    pub(crate) fn bytes(&self) -> &[u8] {
+        match self {
+            Nodes::Bin32(n) => bytemuck::cast_slice(n),
+            Nodes::Bin64(n) => bytemuck::cast_slice(n),
+            Nodes::Wide4(n) => bytemuck::cast_slice(n),
+            Nodes::Wide8(n) => bytemuck::cast_slice(n),
+            Nodes::Cwbvh(n) => bytemuck::cast_slice(n),
+        }
+    }
+}
+
+impl PartialEq for Nodes {
+    fn eq(&self, other: &Self) -> bool {
+        self.bytes() == other.bytes()
+    }
+}
+
+impl std::fmt::Debug for Nodes {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} bytes of nodes", self.bytes().len())
+    }
+}
+
 /// A BVH in one of the device layouts: node bytes, triangles in leaf order, and the
 /// traversal stack the kernels need for it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DeviceLayout {
     pub(crate) layout: Layout,
     /// The nodes, as the kernels read them.
-    pub(crate) nodes: Vec<u8>,
+    pub(crate) nodes: Nodes,
     pub(crate) node_count: usize,
     pub(crate) triangles: Vec<Triangle>,
     /// Entries the traversal stack needs ([`Layout::stack_size`] of the tree's depth).
@@ -115,40 +151,37 @@ pub struct DeviceLayout {
 
 impl DeviceLayout {
     /// Lays the thesis-layout tree out as `layout`; `sah_cost` is the binary tree's.
-    pub fn new(flat: Bin32Bvh, layout: Layout, sah_cost: f64) -> Self {
+    pub fn new(mut flat: Bin32Bvh, layout: Layout, sah_cost: f64) -> Self {
         let depth = flat.depth.max(1);
         // The compressed layout reorders the triangles; the others keep the tree's order.
         let mut reordered = None;
         let (nodes, node_count, stack_size, sah_cost) = match layout {
-            Layout::Bin32 => (
-                bytemuck::cast_slice(&flat.nodes).to_vec(),
-                flat.nodes.len(),
-                layout.stack_size(depth),
-                sah_cost,
-            ),
             Layout::Bin64 => {
                 let n = bin64::to_bvh64(&flat);
-                (
-                    bytemuck::cast_slice(&n).to_vec(),
-                    n.len(),
-                    layout.stack_size(depth),
-                    sah_cost,
-                )
+                let count = n.len();
+                (Nodes::Bin64(n), count, layout.stack_size(depth), sah_cost)
+            }
+            Layout::Bin32 => {
+                let count = flat.nodes.len();
+                let nodes = Nodes::Bin32(std::mem::take(&mut flat.nodes));
+                (nodes, count, layout.stack_size(depth), sah_cost)
             }
             Layout::Wide4 => {
                 let c = wide::collapse::<wide4::Wide4Node>(&flat);
+                let count = c.nodes.len();
                 (
-                    bytemuck::cast_slice(&c.nodes).to_vec(),
-                    c.nodes.len(),
+                    Nodes::Wide4(c.nodes),
+                    count,
                     layout.stack_size(c.depth),
                     c.sah_cost,
                 )
             }
             Layout::Wide8 => {
                 let c = wide::collapse::<wide8::Wide8Node>(&flat);
+                let count = c.nodes.len();
                 (
-                    bytemuck::cast_slice(&c.nodes).to_vec(),
-                    c.nodes.len(),
+                    Nodes::Wide8(c.nodes),
+                    count,
                     layout.stack_size(c.depth),
                     c.sah_cost,
                 )
@@ -156,9 +189,10 @@ impl DeviceLayout {
             Layout::Cwbvh => {
                 let c = cwbvh::compress(&flat);
                 reordered = Some(c.triangles);
+                let count = c.nodes.len();
                 (
-                    bytemuck::cast_slice(&c.nodes).to_vec(),
-                    c.nodes.len(),
+                    Nodes::Cwbvh(c.nodes),
+                    count,
                     layout.stack_size(c.depth),
                     c.sah_cost,
                 )
@@ -176,7 +210,7 @@ impl DeviceLayout {
 
     /// Bytes the device holds per triangle (nodes and triangles together).
     pub(crate) fn bytes_per_triangle(&self) -> f64 {
-        (self.nodes.len() + self.triangles.len() * size_of::<Triangle>()) as f64
+        (self.nodes.bytes().len() + self.triangles.len() * size_of::<Triangle>()) as f64
             / self.triangles.len() as f64
     }
 }

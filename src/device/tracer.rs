@@ -645,7 +645,7 @@ impl<'d> ClTracer<'d> {
         layout: &DeviceLayout,
     ) -> Result<Self> {
         check_program(program, Some(layout.layout))?;
-        Self::with_nodes(device, program, &layout.nodes, &layout.triangles)
+        Self::with_nodes(device, program, layout.nodes.bytes(), &layout.triangles)
     }
 
     /// What the program cache did for this tracer's program; `None` without a cache.
@@ -1565,14 +1565,53 @@ fn wait_ms(device: &ClDevice, event: &ocl::Event) -> Result<f64> {
 }
 
 fn upload<T: ocl::OclPrm>(device: &ClDevice, data: &[T], doing: &str) -> Result<ocl::Buffer<T>> {
-    ocl::Buffer::<T>::builder()
+    if size_of_val(data) <= STAGING_BYTES {
+        return ocl::Buffer::<T>::builder()
+            .queue(device.queue.clone())
+            .flags(ocl::flags::MEM_READ_ONLY | ocl::flags::MEM_COPY_HOST_PTR)
+            .len(data.len())
+            .copy_host_slice(data)
+            .build()
+            .map_err(|e| device.error(doing, e));
+    }
+    let err = |e| device.error(doing, e);
+    let buffer = ocl::Buffer::<T>::builder()
         .queue(device.queue.clone())
-        .flags(ocl::flags::MEM_READ_ONLY | ocl::flags::MEM_COPY_HOST_PTR)
+        .flags(ocl::flags::MEM_READ_ONLY)
         .len(data.len())
-        .copy_host_slice(data)
         .build()
-        .map_err(|e| device.error(doing, e))
+        .map_err(err)?;
+    let per = STAGING_BYTES / size_of::<T>();
+    let staging = ocl::Buffer::<T>::builder()
+        .queue(device.queue.clone())
+        .flags(ocl::flags::MEM_ALLOC_HOST_PTR | ocl::flags::MEM_READ_WRITE)
+        .len(per)
+        .build()
+        .map_err(err)?;
+    for (k, chunk) in data.chunks(per).enumerate() {
+        // Mapping waits for the last chunk's copy out of the staging buffer (one queue, in
+        // order); the chunk is then copied in on every core.
+        // SAFETY: the mapping is only written through, and unmapped before the copy reads it.
+        let mut map =
+            unsafe { staging.map().write_invalidate().len(chunk.len()).enq() }.map_err(err)?;
+        use rayon::prelude::*;
+        map.par_chunks_mut(1 << 16)
+            .zip(chunk.par_chunks(1 << 16))
+            .for_each(|(to, from)| to.copy_from_slice(from));
+        map.unmap().enq().map_err(err)?;
+        staging
+            .copy(&buffer, Some(k * per), Some(chunk.len()))
+            .enq()
+            .map_err(err)?;
+    }
+    device.queue.finish().map_err(err)?;
+    Ok(buffer)
 }
+
+/// Buffers larger than this go to the device in chunks through pinned (page-locked) host
+/// memory, filled on every core: NVIDIA's driver copied pageable memory at 1.6 GB/s, an
+/// 8 GB scene in 5 s.
+const STAGING_BYTES: usize = 64 << 20;
 
 /// Checks, before anything is uploaded, that each of the scene's buffers fits in one device
 /// allocation and that together (with a row of output) they fit in the device's memory.
