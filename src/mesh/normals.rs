@@ -58,120 +58,148 @@ impl Mesh {
             let v = self.triangles[c as usize / 3][c as usize % 3];
             (!has(v)).then(|| group_of[v as usize])
         };
-        let corners = bucket(3 * self.triangles.len() as u32, groups, corner_group);
+        let mut corners = bucket(3 * self.triangles.len() as u32, groups, corner_group);
         let angle = |c: u32| angles[c as usize / 3][c as usize % 3];
         let faces = &faces;
-        // Each group's corners' normals, in the buckets' order, then by corner.
+        let vertex = |c: u32| self.triangles[c as usize / 3][c as usize % 3];
+        // Each group's corners' normals, in the buckets' order; then each group's corners
+        // (and their normals) sorted by vertex, normal and corner.
         let mut grouped = vec![Vec3::ZERO; corners.items.len()];
-        (0..groups)
+        let normals = Buckets::cut(&corners.start, &mut grouped);
+        corners
+            .split_mut()
             .into_par_iter()
-            .zip(corners.split_like(&mut grouped))
+            .zip(normals)
             .with_min_len(1024)
-            .for_each_init(Vec::new, |weighted, (g, out)| {
-                let group = corners.bucket(g);
-                weighted.clear();
-                weighted.extend(group.iter().map(|&c| faces[c as usize / 3] * angle(c)));
+            .for_each_init(Vec::new, |scratch, (group, out)| {
+                scratch.clear();
+                scratch.extend(group.iter().map(|&c| faces[c as usize / 3] * angle(c)));
+                let weighted = &scratch[..];
                 let all: Vec3 = weighted.iter().sum();
-                for (&c, out) in group.iter().zip(out) {
+                for (&c, out) in group.iter().zip(out.iter_mut()) {
                     let own = faces[c as usize / 3];
                     let n = if group.len() > MAX_PAIRWISE {
                         all
                     } else {
                         group
                             .iter()
-                            .zip(weighted.iter())
+                            .zip(weighted)
                             .filter(|(other, _)| faces[**other as usize / 3].dot(own) >= cos_crease)
                             .map(|(_, w)| *w)
                             .sum::<Vec3>()
                     };
                     *out = n.normalize_or_zero();
                 }
+                let mut sorted: Vec<(u32, [u32; 3], u32, Vec3)> = group
+                    .iter()
+                    .zip(out.iter())
+                    .map(|(&c, &n)| (vertex(c), n.to_array().map(f32::to_bits), c, n))
+                    .collect();
+                sorted.sort_unstable_by_key(|e| (e.0, e.1, e.2));
+                for ((c, n), e) in group.iter_mut().zip(out.iter_mut()).zip(sorted) {
+                    (*c, *n) = (e.2, e.3);
+                }
             });
-        let mut normal_of = vec![Vec3::ZERO; 3 * self.triangles.len()];
-        for (&c, &n) in corners.items.iter().zip(&grouped) {
-            normal_of[c as usize] = n;
-        }
-        self.split_by_normal(normal_of);
+        self.split_by_normal(&group_of, &corners, &grouped);
     }
 
-    /// Gives each corner (3 triangle + k) of a vertex without a normal its normal from
-    /// `normal_of`: corners of one vertex with equal normals share it, others get copies of
-    /// the vertex, numbered by vertex and then by the normal's bits (the first normal of a
-    /// vertex keeps its number).
-    fn split_by_normal(&mut self, normal_of: Vec<Vec3>) {
+    /// Gives each corner (3 triangle + k) of a vertex without a normal its normal: the
+    /// corners of each position group in `corners` (sorted by vertex, normal and corner),
+    /// their normals beside them in `normals`. Corners of one vertex with equal normals
+    /// share it, others get copies of the vertex, numbered by group, then vertex, then
+    /// normal (the first normal of a vertex keeps its number).
+    fn split_by_normal(&mut self, group_of: &[u32], corners: &Buckets, normals: &[Vec3]) {
         let n = self.positions.len();
         if self.normals.is_empty() {
             self.normals = vec![Vec3::ZERO; n];
         }
         let vertex = |c: u32| self.triangles[c as usize / 3][c as usize % 3];
-        // The corners given a normal: those of the vertices without one.
-        let mut by_vertex = bucket(3 * self.triangles.len() as u32, n as u32, |c| {
-            let v = vertex(c);
-            (self.normals[v as usize] == Vec3::ZERO).then_some(v)
-        });
-        let normal_of = &normal_of;
-        let bits = |c: u32| normal_of[c as usize].to_array().map(f32::to_bits);
-        // Each vertex's corners by normal, and each vertex's copies: one per normal after
-        // its first.
-        let mut slices = by_vertex.split_mut();
-        let copies: Vec<u32> = slices
-            .par_iter_mut()
+        let bits = |j: usize| normals[j].to_array().map(f32::to_bits);
+        // Entry j of the sorted corners, in the group whose entries start at `first`, starts
+        // a copy: the same vertex as the entry before, another normal.
+        let starts_copy = |first: usize, j: usize| {
+            j > first
+                && vertex(corners.items[j]) == vertex(corners.items[j - 1])
+                && bits(j) != bits(j - 1)
+        };
+        let groups = corners.start.len() - 1;
+        let copies: Vec<u32> = (0..groups as u32)
+            .into_par_iter()
             .with_min_len(1024)
-            .map(|corners| {
-                corners.sort_unstable_by_key(|&c| (bits(c), c));
-                corners
-                    .windows(2)
-                    .filter(|w| bits(w[0]) != bits(w[1]))
-                    .count() as u32
+            .map(|g| {
+                let range = corners.range(g);
+                let first = range.start;
+                range.filter(|&j| starts_copy(first, j)).count() as u32
             })
             .collect();
-        let by_vertex = &by_vertex;
-        let mut first_copy = Vec::with_capacity(n);
+        let mut first_copy = Vec::with_capacity(groups);
         let mut next = n as u32;
         for &k in &copies {
             first_copy.push(next);
             next += k;
         }
-        // Each corner's vertex: its own for its vertex's first normal, else that normal's copy.
-        let distinct_before = |v: u32, c: u32| {
-            let corners = by_vertex.bucket(v);
-            let at = corners.partition_point(|&d| (bits(d), d) < (bits(c), c));
-            corners[..=at]
-                .windows(2)
-                .filter(|w| bits(w[0]) != bits(w[1]))
-                .count() as u32
+        // Each corner's vertex: its own for its vertex's first normal, else its copy for
+        // that normal, found among the few corners of its group.
+        let index_of = |c: u32| {
+            let v = vertex(c);
+            let g = group_of[v as usize];
+            let range = corners.range(g);
+            let first = range.start;
+            let j = range
+                .clone()
+                .find(|&j| corners.items[j] == c)
+                .expect("a corner is in its group");
+            let copies_to_here = (first..=j).filter(|&i| starts_copy(first, i)).count() as u32;
+            // In its vertex's first run of one normal: no copy started since the vertex's
+            // first entry.
+            let own = (first..=j)
+                .rev()
+                .take_while(|&i| vertex(corners.items[i]) == v)
+                .all(|i| !starts_copy(first, i));
+            match own {
+                true => v,
+                false => first_copy[g as usize] + copies_to_here - 1,
+            }
         };
-        let normals_given = |v: u32| !by_vertex.bucket(v).is_empty();
-        self.triangles
-            .par_iter_mut()
+        let given: Vec<bool> = self.normals.par_iter().map(|n| *n == Vec3::ZERO).collect();
+        let triangles: Vec<[u32; 3]> = self
+            .triangles
+            .par_iter()
             .enumerate()
-            .for_each(|(t, tri)| {
+            .with_min_len(4096)
+            .map(|(t, tri)| {
+                let mut tri = *tri;
                 for (k, v) in tri.iter_mut().enumerate() {
-                    if normals_given(*v) {
-                        match distinct_before(*v, (3 * t + k) as u32) {
-                            0 => {}
-                            r => *v = first_copy[*v as usize] + r - 1,
-                        }
+                    if given[*v as usize] {
+                        *v = index_of((3 * t + k) as u32);
                     }
                 }
-            });
-        // The first normal of each vertex, then the copies in order.
-        self.normals
-            .par_iter_mut()
-            .zip(by_vertex.split())
-            .filter(|(_, corners)| !corners.is_empty())
-            .for_each(|(normal, corners)| *normal = normal_of[corners[0] as usize]);
-        let extra: Vec<(u32, Vec3)> = (0..n as u32)
-            .into_par_iter()
-            .with_min_len(1024)
-            .flat_map_iter(|v| {
-                let corners = by_vertex.bucket(v);
-                corners
-                    .windows(2)
-                    .filter(|w| bits(w[0]) != bits(w[1]))
-                    .map(move |w| (v, normal_of[w[1] as usize]))
+                tri
             })
             .collect();
+        // The first normal of each vertex, then the copies, in order.
+        for g in 0..groups as u32 {
+            let range = corners.range(g);
+            let first = range.start;
+            for j in range {
+                let v = vertex(corners.items[j]);
+                if j == first || vertex(corners.items[j - 1]) != v {
+                    self.normals[v as usize] = normals[j];
+                }
+            }
+        }
+        let extra: Vec<(u32, Vec3)> = (0..groups as u32)
+            .into_par_iter()
+            .with_min_len(1024)
+            .flat_map_iter(|g| {
+                let range = corners.range(g);
+                let first = range.start;
+                range
+                    .filter(move |&j| starts_copy(first, j))
+                    .map(|j| (vertex(corners.items[j]), normals[j]))
+            })
+            .collect();
+        self.triangles = triangles;
         for (v, normal) in extra {
             self.positions.push(self.positions[v as usize]);
             self.normals.push(normal);
@@ -185,20 +213,27 @@ impl Mesh {
     }
 }
 
-/// Each vertex's group of vertices at exactly the same position, and the number of groups.
+/// Each vertex's group of vertices at exactly the same position, named by its first
+/// vertex, and the number of names (the vertex count). Named so, rather than numbered in
+/// sorted order, a group's number follows the vertices' order, and so (mostly) the
+/// triangles': the corners counted into groups land near each other in memory instead of
+/// all over it (1.3 s of 7.4 for 10 million triangles on 2 cores).
 fn position_groups(positions: &[Vec3]) -> (Vec<u32>, u32) {
-    let bits = |v: u32| positions[v as usize].to_array().map(f32::to_bits);
-    let mut order: Vec<u32> = (0..positions.len() as u32).collect();
-    order.par_sort_unstable_by_key(|&v| bits(v));
+    let mut keyed: Vec<([u32; 3], u32)> = positions
+        .par_iter()
+        .enumerate()
+        .map(|(v, p)| (p.to_array().map(f32::to_bits), v as u32))
+        .collect();
+    keyed.par_sort_unstable();
     let mut group_of = vec![0; positions.len()];
-    let mut groups = 0;
-    for (i, &v) in order.iter().enumerate() {
-        if i > 0 && bits(v) != bits(order[i - 1]) {
-            groups += 1;
+    let mut first = 0;
+    for (i, &(bits, v)) in keyed.iter().enumerate() {
+        if i == 0 || bits != keyed[i - 1].0 {
+            first = v;
         }
-        group_of[v as usize] = groups;
+        group_of[v as usize] = first;
     }
-    (group_of, groups + u32::from(!positions.is_empty()))
+    (group_of, positions.len() as u32)
 }
 
 /// Items `0..count` sorted into `buckets` buckets by `bucket_of` (`None`: in none), each
@@ -234,26 +269,15 @@ struct Buckets {
 }
 
 impl Buckets {
-    fn bucket(&self, b: u32) -> &[u32] {
-        &self.items[self.start[b as usize] as usize..self.start[b as usize + 1] as usize]
-    }
-
-    /// Every bucket, in order.
-    fn split(&self) -> impl IndexedParallelIterator<Item = &[u32]> {
-        (0..self.start.len() as u32 - 1)
-            .into_par_iter()
-            .map(|b| self.bucket(b))
+    /// The positions of bucket `b`'s items.
+    fn range(&self, b: u32) -> std::ops::Range<usize> {
+        self.start[b as usize] as usize..self.start[b as usize + 1] as usize
     }
 
     /// Every bucket, in order, to change in place.
     fn split_mut(&mut self) -> Vec<&mut [u32]> {
         let (start, items) = (&self.start, &mut self.items);
         Self::cut(start, items)
-    }
-
-    /// `out` (as long as the items) cut into one slice per bucket.
-    fn split_like<'a, T>(&self, out: &'a mut [T]) -> Vec<&'a mut [T]> {
-        Self::cut(&self.start, out)
     }
 
     fn cut<'a, T>(start: &[u32], mut out: &'a mut [T]) -> Vec<&'a mut [T]> {
