@@ -131,3 +131,32 @@ fn depth_stays_bounded_where_the_sah_would_chain() {
         }
     }
 }
+
+#[test]
+fn meshes_large_enough_to_bin_and_partition_in_parallel_build_valid_trees() {
+    // Above 65,536 triangles a node bins and partitions in parallel chunks, and above
+    // 16,384 its subtrees build as parallel tasks laid out behind shared top nodes: the
+    // small meshes of the other tests never reach either path.
+    for generator in [
+        Generator::Soup {
+            triangles: 100_000,
+            seed: 3,
+        },
+        Generator::Landscape {
+            resolution: 200,
+            seed: 2,
+        },
+    ] {
+        let name = generator.name();
+        let mesh = generate(generator);
+        assert!(mesh.triangle_count() > 65_536, "{name} is too small");
+        let rays = rays_for(&mesh, 7, 300);
+        for opts in all_options() {
+            let bvh = Bvh::build(&mesh, &opts);
+            bvh.check(&mesh)
+                .unwrap_or_else(|e| panic!("{name}, {opts:?}: {e}"));
+            same_hits(&mesh, &Bin32Bvh::new(bvh, &mesh), &rays)
+                .unwrap_or_else(|e| panic!("{name}, {opts:?}: {e}"));
+        }
+    }
+}
