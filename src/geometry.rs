@@ -50,6 +50,14 @@ impl Aabb {
         points.into_iter().fold(Self::EMPTY, |b, p| b.grown(p))
     }
 
+    /// The smallest box holding both (either may be empty).
+    pub(crate) fn union(self, o: Aabb) -> Self {
+        Aabb {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
+    }
+
     pub(crate) fn grown(self, p: Vec3) -> Self {
         Aabb {
             min: self.min.min(p),

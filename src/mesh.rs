@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use glam::{Mat3, Mat4, Vec2, Vec3};
+use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::geometry::Aabb;
@@ -66,15 +67,22 @@ impl Mesh {
     /// The box around every vertex a triangle uses (the "auto" camera frames this box).
     pub fn bounds(&self) -> Aabb {
         self.triangles
-            .iter()
-            .flatten()
-            .fold(Aabb::EMPTY, |b, &v| b.grown(self.positions[v as usize]))
+            .par_iter()
+            .fold(
+                || Aabb::EMPTY,
+                |b, t| {
+                    t.iter()
+                        .fold(b, |b, &v| b.grown(self.positions[v as usize]))
+                },
+            )
+            .reduce(|| Aabb::EMPTY, Aabb::union)
     }
 
     /// Triangles whose area is exactly zero. They are kept (their index still counts in the
     /// file order) but no ray ever hits them.
     pub fn degenerate_count(&self) -> usize {
         (0..self.triangles.len())
+            .into_par_iter()
             .filter(|&i| {
                 let [a, b, c] = self.corners(i);
                 (b - a).cross(c - a) == Vec3::ZERO

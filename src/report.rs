@@ -190,9 +190,14 @@ impl Verbosity {
 
     /// Prints a line with `--verbose` only.
     pub(crate) fn detail(self, line: impl AsRef<str>) {
-        if self >= Verbosity::Verbose {
+        if self.shows_details() {
             print_message(line.as_ref());
         }
+    }
+
+    /// Whether [`Verbosity::detail`] prints: for details that cost time to compute.
+    pub(crate) fn shows_details(self) -> bool {
+        self >= Verbosity::Verbose
     }
 
     pub(crate) fn progress(self) -> bool {

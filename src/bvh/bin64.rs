@@ -42,17 +42,23 @@ pub(crate) fn to_bvh64(flat: &Bin32Bvh) -> Vec<Bin64Node> {
     for b in &mut before {
         (*b, sum) = (sum, sum + *b);
     }
-    let mut index = vec![u32::MAX; nodes.len()];
+    // Untouched zeroed pages, filled on every core: a single-threaded fill, or a filtered
+    // collect into one vector, takes seconds for a hundred million triangles.
+    let mut index: Vec<u32> = bytemuck::zeroed_vec(nodes.len());
     index
         .par_chunks_mut(CHUNK)
         .zip(nodes.par_chunks(CHUNK))
-        .zip(before)
-        .for_each(|((index, nodes), mut count)| {
+        .zip(before.par_iter())
+        .for_each(|((index, nodes), &first)| {
+            let mut count = first;
             for (i, n) in index.iter_mut().zip(nodes) {
-                if !n.is_leaf() {
-                    *i = count;
-                    count += 1;
-                }
+                *i = match n.is_leaf() {
+                    true => u32::MAX,
+                    false => {
+                        count += 1;
+                        count - 1
+                    }
+                };
             }
         });
     let reference = |i: usize| {
@@ -63,20 +69,30 @@ pub(crate) fn to_bvh64(flat: &Bin32Bvh) -> Vec<Bin64Node> {
             (index[i], 0)
         }
     };
-    nodes
-        .par_iter()
-        .with_min_len(4096)
-        .filter(|n| !n.is_leaf())
-        .map(|n| {
-            let (l, r) = (n.left_or_first as usize, n.right_or_count as usize);
-            let (lref, lcount) = reference(l);
-            let (rref, rcount) = reference(r);
-            let mut node = pair(&nodes[l], &nodes[r], lref, rref);
-            node.refs[2] = lcount;
-            node.refs[3] = rcount;
-            node
-        })
-        .collect()
+    // Each chunk of binary nodes writes its inner nodes to its own run of the output.
+    let mut out: Vec<Bin64Node> = bytemuck::zeroed_vec(sum as usize);
+    let mut runs = Vec::with_capacity(before.len());
+    let mut rest = out.as_mut_slice();
+    for (k, &first) in before.iter().enumerate() {
+        let next = before.get(k + 1).copied().unwrap_or(sum);
+        let (run, tail) = std::mem::take(&mut rest).split_at_mut((next - first) as usize);
+        runs.push(run);
+        rest = tail;
+    }
+    runs.into_par_iter()
+        .zip(nodes.par_chunks(CHUNK))
+        .for_each(|(run, chunk)| {
+            let inner = chunk.iter().filter(|n| !n.is_leaf());
+            for (slot, n) in run.iter_mut().zip(inner) {
+                let (l, r) = (n.left_or_first as usize, n.right_or_count as usize);
+                let (lref, lcount) = reference(l);
+                let (rref, rcount) = reference(r);
+                *slot = pair(&nodes[l], &nodes[r], lref, rref);
+                slot.refs[2] = lcount;
+                slot.refs[3] = rcount;
+            }
+        });
+    out
 }
 
 fn pair(l: &Bin32Node, r: &Bin32Node, lref: u32, rref: u32) -> Bin64Node {

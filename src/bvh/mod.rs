@@ -53,6 +53,11 @@ impl SahCost {
         self.0 += INTERSECTION_COST as f64 * area * count as f64;
     }
 
+    /// Adds the nodes another sum covers.
+    pub(crate) fn add(&mut self, other: SahCost) {
+        self.0 += other.0;
+    }
+
     /// The cost relative to the root's area; `None` where the root has none (every
     /// triangle in one point or line).
     pub(crate) fn relative_to(self, root_area: f64) -> Option<f64> {

@@ -426,13 +426,16 @@ fn render_with(
     for d in &devices {
         v.detail(format!("device: {}", d.info));
     }
-    v.detail(format!(
-        "mesh: {} ({} triangles, {} vertices, {} of zero area)",
-        scene.meshes.name(),
-        mesh.triangle_count(),
-        mesh.positions.len(),
-        mesh.degenerate_count()
-    ));
+    // Counting triangles of zero area is a pass over every triangle: only when shown.
+    if v.shows_details() {
+        v.detail(format!(
+            "mesh: {} ({} triangles, {} vertices, {} of zero area)",
+            scene.meshes.name(),
+            mesh.triangle_count(),
+            mesh.positions.len(),
+            mesh.degenerate_count()
+        ));
+    }
     let camera_settings = match &scene.animation {
         Some(a) => a.settings_at(req.frame, &req.camera, &scene.camera, &bounds)?,
         None => with_file_camera(camera_settings, file_camera, v),
