@@ -149,11 +149,6 @@ impl Bounds {
     }
 }
 
-// SAFETY: a `Bounds` is two `Vec3A`s, plain f32 lanes (and padding-free vectors of
-// them), for which all-zero bits are the valid value 0.0. The builders rely on it to
-// allocate their large buffers as untouched zeroed pages (`bytemuck::zeroed_vec`).
-unsafe impl bytemuck::Zeroable for Bounds {}
-
 /// The surface area of the box `[min, max]` in f64 (extents subtracted in f32, negative
 /// ones counting as zero), as the SAH costs of the collapsed trees sum it.
 pub(crate) fn surface_area_f64(min: Vec3, max: Vec3) -> f64 {
