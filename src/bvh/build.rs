@@ -3,7 +3,8 @@
 //! Each node's triangles are split in two by a plane chosen under the surface area
 //! heuristic: binned over centroids on all three axes (Wald, "On fast Construction of
 //! SAH-based Bounding Volume Hierarchies", 2007), or by an exact sweep over every
-//! centroid-sorted position. Large nodes bin in parallel and subtrees build in parallel.
+//! centroid-sorted position. Large nodes bin in parallel, the largest partition in
+//! parallel, and subtrees build in parallel.
 //!
 //! Nodes are stored in depth-first order as they are made. Large nodes split and hand
 //! their two halves to parallel tasks; each task writes its subtree into its own compact
@@ -23,6 +24,9 @@ use crate::mesh::Mesh;
 const PARALLEL_SUBTREES: usize = 1 << 14;
 /// Nodes with more triangles than this bin in parallel chunks.
 const PARALLEL_BINNING: usize = 1 << 16;
+/// Nodes with more triangles than this partition in parallel chunks: near the root,
+/// where too few subtrees run at once to keep every core busy.
+const PARALLEL_PARTITION: usize = 1 << 20;
 /// The most bins per axis [`BuildOptions::bins`] may ask for (a power of two).
 pub(super) const MAX_BINS: usize = 64;
 
@@ -413,14 +417,16 @@ impl Ctx {
         // floor(f) < split_bin exactly when f < split_bin, f being the same lane product the
         // binning floored.
         let plane = split_bin as f32;
-        let (i, lc, rc) = match axis {
-            0 => partition(prims, |p| {
+        let goes_left = |p: &Bounds| ((p.centroid() - centroids.min) * scale)[axis] < plane;
+        let (i, lc, rc) = match (prims.len() > PARALLEL_PARTITION, axis) {
+            (true, _) => parallel_partition(prims, goes_left),
+            (false, 0) => partition(prims, |p| {
                 ((p.centroid() - centroids.min) * scale).x < plane
             }),
-            1 => partition(prims, |p| {
+            (false, 1) => partition(prims, |p| {
                 ((p.centroid() - centroids.min) * scale).y < plane
             }),
-            _ => partition(prims, |p| {
+            (false, _) => partition(prims, |p| {
                 ((p.centroid() - centroids.min) * scale).z < plane
             }),
         };
@@ -452,6 +458,96 @@ fn partition(prims: &mut Prims, goes_left: impl Fn(&Bounds) -> bool) -> (usize, 
         left += is_left as usize;
     }
     (left, lc, rc)
+}
+
+/// [`partition`] for a large node, on every core: each chunk partitions itself in place,
+/// and then the right-side triangles in front of the split point trade places with the
+/// left-side ones behind it, pair by pair in order, in pieces of a chunk's size. Near the
+/// root a sequential partition of every triangle would leave all but a few cores idle.
+fn parallel_partition(
+    prims: &mut Prims,
+    goes_left: impl Fn(&Bounds) -> bool + Sync,
+) -> (usize, Bounds, Bounds) {
+    const CHUNK: usize = 1 << 14;
+    let n = prims.len();
+    let parts: Vec<(usize, Bounds, Bounds)> = prims
+        .boxes
+        .par_chunks_mut(CHUNK)
+        .zip(prims.ids.par_chunks_mut(CHUNK))
+        .map(|(boxes, ids)| {
+            let mut chunk = Prims {
+                boxes,
+                ids,
+                first: 0,
+            };
+            partition(&mut chunk, &goes_left)
+        })
+        .collect();
+    let left: usize = parts.iter().map(|p| p.0).sum();
+    let (mut lc, mut rc) = (Bounds::EMPTY, Bounds::EMPTY);
+    // Triangles on the wrong side of `left`: chunks' right parts before it, their left
+    // parts after it. There are as many of one as of the other.
+    let (mut wrong_right, mut wrong_left) = (Vec::new(), Vec::new());
+    for (k, &(count, l, r)) in parts.iter().enumerate() {
+        (lc, rc) = (lc.union(l), rc.union(r));
+        let (start, end) = (k * CHUNK, ((k + 1) * CHUNK).min(n));
+        let mid = start + count;
+        if mid < left {
+            wrong_right.push(mid..end.min(left));
+        }
+        if mid > left {
+            wrong_left.push(start.max(left)..mid);
+        }
+    }
+    // Pair them in order, in pieces of at most a chunk.
+    let (mut a_pieces, mut b_pieces) = (Vec::new(), Vec::new());
+    let (mut a, mut b) = (wrong_right.into_iter(), wrong_left.into_iter());
+    let (mut ra, mut rb) = (a.next(), b.next());
+    while let (Some(x), Some(y)) = (ra.as_mut(), rb.as_mut()) {
+        let len = x.len().min(y.len()).min(CHUNK);
+        a_pieces.push(x.start..x.start + len);
+        b_pieces.push(y.start..y.start + len);
+        x.start += len;
+        y.start += len;
+        if x.start == x.end {
+            ra = a.next();
+        }
+        if y.start == y.end {
+            rb = b.next();
+        }
+    }
+    debug_assert!(ra.is_none() && rb.is_none(), "as many wrong on each side");
+    let (boxes_front, boxes_back) = prims.boxes.split_at_mut(left);
+    let (ids_front, ids_back) = prims.ids.split_at_mut(left);
+    let front = carve(boxes_front, &a_pieces, 0).zip(carve(ids_front, &a_pieces, 0));
+    let back = carve(boxes_back, &b_pieces, left).zip(carve(ids_back, &b_pieces, left));
+    front
+        .zip(back)
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .for_each(|((fb, fi), (bb, bi))| {
+            fb.swap_with_slice(bb);
+            fi.swap_with_slice(bi);
+        });
+    (left, lc, rc)
+}
+
+/// The slices of `items` (whose first element has index `offset`) at `ranges`, which are
+/// in increasing order and do not overlap.
+fn carve<'a, T>(
+    mut items: &'a mut [T],
+    ranges: &[std::ops::Range<usize>],
+    mut offset: usize,
+) -> impl Iterator<Item = &'a mut [T]> {
+    let mut pieces = Vec::with_capacity(ranges.len());
+    for r in ranges {
+        let (_, rest) = std::mem::take(&mut items).split_at_mut(r.start - offset);
+        let (piece, rest) = rest.split_at_mut(r.len());
+        pieces.push(piece);
+        items = rest;
+        offset = r.end;
+    }
+    pieces.into_iter()
 }
 
 /// Whether keeping `n` triangles in a leaf costs no more than splitting them, given the
@@ -803,4 +899,57 @@ fn apply_order(prims: &mut Prims, order: &[u32], scratch: &mut Scratch) {
         .extend(order.iter().map(|&i| prims.ids[i as usize]));
     prims.boxes.copy_from_slice(&scratch.boxes);
     prims.ids.copy_from_slice(&scratch.ids);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Boxes around points in a pseudo-random order, and a plane through the middle.
+    fn scattered(n: usize) -> (Vec<Bounds>, Vec<u32>) {
+        let boxes = (0..n as u64)
+            .map(|i| {
+                let x = (i.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40) as f32;
+                Bounds::new([x, 0.0, 0.0], [x + 1.0, 1.0, 1.0])
+            })
+            .collect();
+        (boxes, (0..n as u32).collect())
+    }
+
+    #[test]
+    fn the_parallel_partition_is_a_partition_with_the_sequential_ones_sides() {
+        // Sizes around the chunk size, so that misplaced runs start and end mid-chunk.
+        for n in [1, 5000, (1 << 14) + 1, 3 * (1 << 14) - 7, 200_000] {
+            for threshold in [0.0, 0.3, 0.5, 0.97, 2.0] {
+                let (mut boxes, mut ids) = scattered(n);
+                let (mut seq_boxes, mut seq_ids) = (boxes.clone(), ids.clone());
+                let cut = threshold * (1 << 24) as f32;
+                let goes_left = |b: &Bounds| b.min.x < cut;
+                let mut prims = Prims {
+                    boxes: &mut boxes,
+                    ids: &mut ids,
+                    first: 0,
+                };
+                let (left, lc, rc) = parallel_partition(&mut prims, goes_left);
+                let mut seq = Prims {
+                    boxes: &mut seq_boxes,
+                    ids: &mut seq_ids,
+                    first: 0,
+                };
+                let expected = partition(&mut seq, goes_left);
+                assert_eq!((left, lc, rc), expected, "{n} triangles, {threshold}");
+                assert!(boxes[..left].iter().all(goes_left), "{n}, {threshold}");
+                assert!(!boxes[left..].iter().any(goes_left), "{n}, {threshold}");
+                // Boxes and indices moved together, and every triangle is still there once.
+                let (original, _) = scattered(n);
+                assert!(
+                    ids.iter()
+                        .zip(&boxes)
+                        .all(|(&i, b)| original[i as usize] == *b)
+                );
+                ids.sort_unstable();
+                assert!(ids.iter().enumerate().all(|(k, &i)| k as u32 == i));
+            }
+        }
+    }
 }
