@@ -342,6 +342,57 @@ fn bench_writes_a_table_csv_and_json_with_a_row_per_method() {
 /// sample's camera ray, and the bounces of those that hit the sphere) and at most two a
 /// segment of each, its Msamples/s are the pixels x spp over its median time, and the
 /// table's two speeds keep the ratio of rays to samples.
+/// `bench --scaling` up to a size of its own: a row per size and ray kind asked for, the
+/// largest size the one named, and the plot drawn.
+#[test]
+fn bench_scaling_measures_each_size_up_to_the_one_asked_for_and_plots_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let plot = dir.path().join("scaling.png");
+    let device = test_device();
+    let mut cmd = cltrace();
+    cmd.args(["bench", "--scaling", "--scaling-to", "30k"])
+        .args(["--methods", "cl-bvh", "--layouts", "bin32"])
+        .args([
+            "--rays",
+            "primary,path",
+            "--path-spp",
+            "1",
+            "--path-bounces",
+            "1",
+        ])
+        .args(["--warmup", "0", "--repetitions", "1"])
+        .args(["--devices", &device.index()])
+        .arg("--plot")
+        .arg(&plot);
+    let out: Output = run(cmd);
+    succeeded(&out);
+    let stdout = text(&out.stdout);
+    let (header, rows) = markdown_rows(&stdout);
+    let column = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let sizes: Vec<(u64, &str)> = rows
+        .iter()
+        .map(|r| {
+            (
+                r[column("triangles")].parse().unwrap(),
+                r[column("rays")].as_str(),
+            )
+        })
+        .collect();
+    // Hillsides of 2 r^2 triangles: r = 71 and 122 come closest to 10k and 30k.
+    assert_eq!(
+        sizes,
+        [
+            (10_082, "primary"),
+            (10_082, "path"),
+            (29_768, "primary"),
+            (29_768, "path")
+        ],
+        "{stdout}"
+    );
+    let image = image::open(&plot).unwrap();
+    assert!(image.width() > 100 && image.height() > 100);
+}
+
 #[test]
 fn bench_path_rows_count_samples_and_every_ray() {
     let dir = tempfile::tempdir().unwrap();

@@ -6,7 +6,7 @@
 mod scaling;
 mod table;
 
-pub(crate) use scaling::{plot_scaling, scaling_request, scaling_table};
+pub(crate) use scaling::{plot_scaling, scaling_request, scaling_sizes, scaling_table};
 pub(crate) use table::{markdown, write_csv, write_json};
 
 use std::path::{Path, PathBuf};

@@ -1,39 +1,54 @@
 //! `cltrace bench --scaling`: how build time, memory and tracing speed grow with the mesh,
-//! on a generated hillside of about 10 thousand to 10 million triangles.
+//! on generated hillsides from about 10 thousand triangles to `--scaling-to` (10 million
+//! unless asked for more).
 
 use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::{BenchRequest, BenchRow, RayKind};
+use super::{BenchRequest, BenchRow};
 use crate::error::{Error, Result};
 use crate::input::generate::Generator;
 use crate::output::write_atomically;
 use crate::render::Method;
 
-/// The triangle counts measured (a hillside of `2 r^2` triangles comes closest).
-pub(crate) const SCALING_SIZES: [u64; 4] = [10_000, 100_000, 1_000_000, 10_000_000];
+/// The smallest hillside of the study, in triangles.
+const SMALLEST: u64 = 10_000;
 
-/// The bench request for the scaling study: the BVH methods at 1920x1080 on hillsides of
-/// each size, everything else as in `base`.
-pub(crate) fn scaling_request(base: &BenchRequest) -> BenchRequest {
+/// The largest hillside the generators make: resolution 32767, `2 r^2` triangles.
+pub(crate) const LARGEST: u64 = 2 * 32767 * 32767;
+
+/// The triangle counts measured up to `to`: every power of ten from 10 thousand, then `to`
+/// itself. Counts outside [10 thousand, [`LARGEST`]] are an error.
+pub(crate) fn scaling_sizes(to: u64) -> Result<Vec<u64>> {
+    if !(SMALLEST..=LARGEST).contains(&to) {
+        return Err(Error::Invalid(format!(
+            "--scaling-to {to}: give between {SMALLEST} and {LARGEST} triangles (the largest hillside)"
+        )));
+    }
+    let mut sizes: Vec<u64> = std::iter::successors(Some(SMALLEST), |n| n.checked_mul(10))
+        .take_while(|&n| n < to)
+        .collect();
+    sizes.push(to);
+    Ok(sizes)
+}
+
+/// The bench request for one size of the scaling study: the BVH methods at 1920x1080 on a
+/// hillside of about `triangles`, everything else (ray kinds included) as in `base`.
+pub(crate) fn scaling_request(base: &BenchRequest, triangles: u64) -> BenchRequest {
     BenchRequest {
         scenes: Vec::new(),
         scene_folders: Vec::new(),
-        generated: SCALING_SIZES
-            .iter()
-            .map(|&n| Generator::Hillside {
-                resolution: ((n as f64 / 2.0).sqrt().round()) as u32,
-                seed: 1,
-            })
-            .collect(),
+        generated: vec![Generator::Hillside {
+            resolution: ((triangles as f64 / 2.0).sqrt().round()).max(1.0) as u32,
+            seed: 1,
+        }],
         methods: base
             .methods
             .iter()
             .copied()
             .filter(|m| m.uses_bvh())
             .collect(),
-        ray_kinds: vec![RayKind::Primary],
         resolutions: vec![(1920, 1080)],
         ..base.clone()
     }
@@ -42,15 +57,16 @@ pub(crate) fn scaling_request(base: &BenchRequest) -> BenchRequest {
 /// The scaling rows as a Markdown table: build cost, memory and speed per size.
 pub(crate) fn scaling_table(rows: &[BenchRow]) -> String {
     let mut out = String::from(
-        "| scene | triangles | method | device | build ms | threads | bytes/triangle | SAH cost | Mrays/s |\n|---|---|---|---|---|---|---|---|---|\n",
+        "| scene | triangles | method | device | rays | build ms | threads | bytes/triangle | SAH cost | Mrays/s |\n|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         out += &format!(
-            "| {} | {} | {} | {} | {} | {} | {:.1} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {:.1} | {} | {} |\n",
             r.scene,
             r.triangles,
             r.method,
             r.device,
+            r.ray_kind,
             r.build_ms.map_or("-".into(), |v| format!("{v:.1}")),
             r.build_threads.map_or("-".into(), |t| t.to_string()),
             r.device_mb * 1e6 / r.triangles as f64,
@@ -61,11 +77,12 @@ pub(crate) fn scaling_table(rows: &[BenchRow]) -> String {
     out
 }
 
-/// Draws build time and tracing speed against triangle count (log-log) into a PNG.
+/// Draws build time, device bytes per triangle and tracing speed against triangle count
+/// (log scales) into a PNG.
 pub(crate) fn plot_scaling(rows: &[BenchRow], path: &Path) -> Result<()> {
     let fail =
         |e: &dyn std::fmt::Display| Error::output(path, format!("cannot draw the plot: {e}"));
-    let (width, height) = (1400u32, 560u32);
+    let (width, height) = (2100u32, 560u32);
     let mut pixels = vec![255u8; (width * height * 3) as usize];
     {
         // plotters draws text with a font it is given, not with the system's.
@@ -76,8 +93,10 @@ pub(crate) fn plot_scaling(rows: &[BenchRow], path: &Path) -> Result<()> {
         )
         .map_err(|_| fail(&"the built-in font is unreadable"))?;
         let root = BitMapBackend::with_buffer(&mut pixels, (width, height)).into_drawing_area();
-        let (left, right) = root.split_horizontally(width / 2);
-        let sizes = (SCALING_SIZES[0] as f64 / 2.0)..(SCALING_SIZES[3] as f64 * 2.0);
+        let (left, rest) = root.split_horizontally(width / 3);
+        let (middle, right) = rest.split_horizontally(width / 3);
+        let largest = rows.iter().map(|r| r.triangles).max().unwrap_or(1) as f64;
+        let sizes = (SMALLEST as f64 / 2.0)..(largest * 2.0);
 
         let builds: Vec<(f64, f64)> = dedup_builds(rows);
         let max_build = builds.iter().map(|p| p.1).fold(1.0, f64::max) * 2.0;
@@ -102,13 +121,60 @@ pub(crate) fn plot_scaling(rows: &[BenchRow], path: &Path) -> Result<()> {
             )
             .map_err(|e| fail(&e))?;
 
+        // Device memory per triangle: triangles and nodes, one point per mesh and layout.
+        let mut memory: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+        for r in rows.iter().filter(|r| r.device_mb > 0.0) {
+            let point = (r.triangles as f64, r.device_mb * 1e6 / r.triangles as f64);
+            match memory.iter_mut().find(|s| s.0 == r.method) {
+                Some(s) if !s.1.iter().any(|p| p.0 == point.0) => s.1.push(point),
+                Some(_) => {}
+                None => memory.push((r.method.clone(), vec![point])),
+            }
+        }
+        let max_bytes = memory
+            .iter()
+            .flat_map(|s| s.1.iter().map(|p| p.1))
+            .fold(1.0, f64::max)
+            * 1.25;
+        let mut chart = ChartBuilder::on(&middle)
+            .caption("device memory", ("sans-serif", 24))
+            .margin(20)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .build_cartesian_2d(sizes.clone().log_scale(), 0.0..max_bytes)
+            .map_err(|e| fail(&e))?;
+        chart
+            .configure_mesh()
+            .x_desc("triangles")
+            .y_desc("bytes per triangle")
+            .x_label_formatter(&|n| count(*n))
+            .draw()
+            .map_err(|e| fail(&e))?;
+        for (i, (label, points)) in memory.into_iter().enumerate() {
+            let color = Palette99::pick(i).to_rgba();
+            chart
+                .draw_series(LineSeries::new(points, color.stroke_width(2)).point_size(4))
+                .map_err(|e| fail(&e))?
+                .label(label)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::LowerLeft)
+            .draw()
+            .map_err(|e| fail(&e))?;
+
         let max_rate = rows
             .iter()
             .filter_map(|r| r.mrays_per_s)
             .fold(1.0, f64::max)
             * 2.0;
         let mut chart = ChartBuilder::on(&right)
-            .caption("primary rays, 1920x1080", ("sans-serif", 24))
+            .caption("tracing speed, 1920x1080", ("sans-serif", 24))
             .margin(20)
             .x_label_area_size(45)
             .y_label_area_size(70)
@@ -178,15 +244,15 @@ fn dedup_builds(rows: &[BenchRow]) -> Vec<(f64, f64)> {
     points
 }
 
-/// Tracing speed against size, one series per method and device.
+/// Tracing speed against size, one series per method, device and ray kind.
 fn series_by_target(rows: &[BenchRow]) -> Vec<(String, Vec<(f64, f64)>)> {
     let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
     for r in rows {
         let Some(rate) = r.mrays_per_s else { continue };
         let label = if r.method == Method::CpuBvh.name() {
-            format!("{} on the host", r.method)
+            format!("{} on the host, {}", r.method, r.ray_kind)
         } else {
-            format!("{} on {}", r.method, r.device)
+            format!("{} on {}, {}", r.method, r.device, r.ray_kind)
         };
         match series.iter_mut().find(|s| s.0 == label) {
             Some(s) => s.1.push((r.triangles as f64, rate)),
@@ -194,4 +260,32 @@ fn series_by_target(rows: &[BenchRow]) -> Vec<(String, Vec<(f64, f64)>)> {
         }
     }
     series
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_study_takes_each_power_of_ten_below_its_largest_size_then_that_size() {
+        let sizes = |to| scaling_sizes(to).unwrap();
+        assert_eq!(sizes(10_000), [10_000]);
+        assert_eq!(sizes(10_000_000), [10_000, 100_000, 1_000_000, 10_000_000]);
+        assert_eq!(
+            sizes(300_000_000),
+            [
+                10_000,
+                100_000,
+                1_000_000,
+                10_000_000,
+                100_000_000,
+                300_000_000
+            ]
+        );
+        assert_eq!(sizes(LARGEST).last(), Some(&LARGEST));
+        for bad in [0, 9_999, LARGEST + 1] {
+            let err = scaling_sizes(bad).unwrap_err().to_string();
+            assert!(err.contains("--scaling-to"), "{err}");
+        }
+    }
 }

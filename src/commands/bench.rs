@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use super::Ending;
 use crate::bench::{self, BenchRequest};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::output::check_output;
 use crate::report::{print_data, print_message};
 
@@ -16,6 +16,8 @@ pub struct BenchCommand {
     pub request: BenchRequest,
     /// Measure the BVH methods on generated hillsides of growing size instead of the scenes.
     pub scaling: bool,
+    /// With `scaling`, the largest hillside's triangles.
+    pub scaling_to: u64,
     /// Also write the rows as CSV here.
     pub csv: Option<PathBuf>,
     /// Also write the rows as JSON here.
@@ -32,7 +34,7 @@ pub fn bench(cmd: &BenchCommand) -> Result<Ending> {
         check_output(path)?;
     }
     let (rows, complete) = if cmd.scaling {
-        let (rows, complete) = bench::run(&bench::scaling_request(&cmd.request))?;
+        let (rows, complete) = scaling(cmd)?;
         print_data(&bench::scaling_table(&rows));
         if let Some(plot) = &cmd.plot {
             bench::plot_scaling(&rows, plot)?;
@@ -59,4 +61,34 @@ pub fn bench(cmd: &BenchCommand) -> Result<Ending> {
         ));
     }
     Ok(Ending::Partial)
+}
+
+/// The scaling study, size by size. A size that cannot be made or measured (host or
+/// device memory) ends the study with a note naming the largest that could, unless it is
+/// the first.
+fn scaling(cmd: &BenchCommand) -> Result<(Vec<bench::BenchRow>, bool)> {
+    let mut rows = Vec::new();
+    let mut largest = None;
+    for size in bench::scaling_sizes(cmd.scaling_to)? {
+        match bench::run(&bench::scaling_request(&cmd.request, size)) {
+            Ok((more, complete)) => {
+                rows.extend(more);
+                largest = Some(size);
+                if !complete {
+                    return Ok((rows, false));
+                }
+            }
+            Err(Error::Interrupted) if !rows.is_empty() => return Ok((rows, false)),
+            Err(e) => match largest {
+                Some(largest) => {
+                    print_message(&format!(
+                        "note: the study stops at {size} triangles ({e}); the largest measured has {largest}"
+                    ));
+                    break;
+                }
+                None => return Err(e),
+            },
+        }
+    }
+    Ok((rows, true))
 }

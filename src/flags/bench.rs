@@ -12,19 +12,13 @@ use cltrace::render::Method;
 use cltrace::report::Verbosity;
 
 use super::build::BuildArgs;
-use super::values::{all_names, choice, device_list, parse_resolution, whole_number};
+use super::values::{
+    all_names, choice, device_list, parse_resolution, triangle_count, whole_number,
+};
 
-/// Every method, every layout, and the ray kinds but path tracing: the defaults of the
-/// lists.
+/// Every method and every layout: the defaults of the lists.
 static METHODS: LazyLock<String> = LazyLock::new(all_names::<Method>);
 static LAYOUTS: LazyLock<String> = LazyLock::new(all_names::<Layout>);
-static RAY_KINDS: LazyLock<String> = LazyLock::new(|| {
-    RayKind::DEFAULT
-        .iter()
-        .map(|k| k.name())
-        .collect::<Vec<_>>()
-        .join(",")
-});
 
 pub const EXAMPLES: &str = "\
 Examples:
@@ -74,14 +68,10 @@ pub struct BenchArgs {
     #[arg(long, default_value = "all")]
     devices: String,
 
-    /// Ray kinds to measure, comma-separated (path tracing only when named)
-    #[arg(
-        long,
-        value_parser = choice::<RayKind>(),
-        value_delimiter = ',',
-        default_value = RAY_KINDS.as_str()
-    )]
-    rays: Vec<RayKind>,
+    /// Ray kinds to measure, comma-separated (path tracing only when named) [default:
+    /// primary,diffuse; with --scaling: primary]
+    #[arg(long, value_parser = choice::<RayKind>(), value_delimiter = ',')]
+    rays: Option<Vec<RayKind>>,
 
     /// Samples per pixel of a path-tracing frame (`--rays path`), 1 to 65536
     #[arg(value_parser = whole_number, long, value_name = "N", default_value_t = 16)]
@@ -116,13 +106,20 @@ pub struct BenchArgs {
     json: Option<PathBuf>,
 
     /// Instead of scenes: the BVH methods at 1920x1080 on generated hillsides of 10 thousand
-    /// to 10 million triangles, to show how build time, memory and speed grow
+    /// to 10 million triangles (or --scaling-to), to show how build time, memory and speed
+    /// grow
     #[arg(long)]
     scaling: bool,
 
     /// With --scaling, also draw build time and Mrays/s against triangles into this PNG
     #[arg(long, value_name = "FILE.png", requires = "scaling")]
     plot: Option<PathBuf>,
+
+    /// With --scaling, the largest hillside, in triangles (`300M`, `2G` or a count; up to
+    /// 2,147,352,578): the study measures each power of ten from 10 thousand below it,
+    /// then it, and stops with a note at the first size memory cannot hold
+    #[arg(long, value_name = "TRIANGLES", requires = "scaling", value_parser = triangle_count, default_value = "10M")]
+    scaling_to: u64,
 
     #[command(flatten)]
     build: BuildArgs,
@@ -146,7 +143,11 @@ impl BenchArgs {
                 methods: self.methods,
                 layouts: self.layouts,
                 devices: device_list(&self.devices),
-                ray_kinds: self.rays,
+                ray_kinds: match (self.rays, self.scaling) {
+                    (Some(kinds), _) => kinds,
+                    (None, false) => RayKind::DEFAULT.to_vec(),
+                    (None, true) => vec![RayKind::Primary],
+                },
                 path_spp: self.path_spp,
                 path_bounces: self.path_bounces,
                 resolutions: self.resolutions,
@@ -157,6 +158,7 @@ impl BenchArgs {
                 verbosity: Verbosity::from_flags(self.quiet, self.verbose),
             },
             scaling: self.scaling,
+            scaling_to: self.scaling_to,
             csv: self.csv,
             json: self.json,
             plot: self.plot,

@@ -26,6 +26,26 @@ pub fn whole_number(s: &str) -> Result<u32, String> {
     })
 }
 
+/// A triangle count: a whole number, or one with a suffix `k`, `M` or `G` (thousands,
+/// millions, billions; `300M`, `2.5G`).
+pub fn triangle_count(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let (number, scale) = match t.char_indices().last() {
+        Some((i, 'k' | 'K')) => (&t[..i], 1e3),
+        Some((i, 'M')) => (&t[..i], 1e6),
+        Some((i, 'G')) => (&t[..i], 1e9),
+        _ => (t, 1.0),
+    };
+    match number.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 && (v * scale) < 1e15 && (v * scale).fract() == 0.0 => {
+            Ok((v * scale) as u64)
+        }
+        _ => Err(format!(
+            "`{s}` is not a triangle count: a whole number, or one with k, M or G (300M)"
+        )),
+    }
+}
+
 /// A library enum a flag chooses among: every value, its name on the command line (which
 /// its `FromStr` reads back) and a line on it for `--help`.
 pub trait Choice: Copy + FromStr<Err = String> + Send + Sync + 'static {
@@ -139,4 +159,20 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
 pub fn device_list(flag: &str) -> Option<Vec<String>> {
     (!flag.trim().eq_ignore_ascii_case("all"))
         .then(|| flag.split(',').map(|s| s.trim().to_string()).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triangle_counts_take_k_m_and_g() {
+        assert_eq!(triangle_count("300M"), Ok(300_000_000));
+        assert_eq!(triangle_count("2.5G"), Ok(2_500_000_000));
+        assert_eq!(triangle_count(" 10k "), Ok(10_000));
+        assert_eq!(triangle_count("12345"), Ok(12_345));
+        for bad in ["", "M", "-1M", "1.5", "ten", "1e300", "3T"] {
+            assert!(triangle_count(bad).is_err(), "{bad}");
+        }
+    }
 }
