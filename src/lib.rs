@@ -5,8 +5,9 @@
 //! (`tests/module_graph.rs` keeps it so):
 //!
 //! - [`error`], [`geometry`]: the error type; rays and boxes.
-//! - [`mesh`], [`camera`], [`interrupt`]: the triangle mesh every stage reads; the pinhole
-//!   camera and its exact pixel-to-ray arithmetic; the Ctrl-C flag long work polls.
+//! - [`mesh`], [`camera`], [`interrupt`], [`huge_pages`]: the triangle mesh every stage
+//!   reads; the pinhole camera and its exact pixel-to-ray arithmetic; the Ctrl-C flag long
+//!   work polls; the binary's allocator, which puts large buffers in huge pages.
 //! - [`intersect`], [`animation`]: the stored triangle, the watertight ray/triangle test
 //!   and the robust slab test (mirrored in `cl/intersect.cl`), and
 //!   [`intersect::ClosestHit`], what every host tracer answers; the camera of each frame of
@@ -33,6 +34,7 @@ pub mod geometry;
 pub(crate) mod hash;
 
 pub mod camera;
+pub mod huge_pages;
 pub mod interrupt;
 pub mod mesh;
 

@@ -10,6 +10,10 @@ use cltrace::interrupt::{self, Request};
 use cltrace::report::{print_data, print_message};
 use flags::Command;
 
+// Large buffers in huge pages: fewer page faults for the cores filling them (src/huge_pages.rs).
+#[global_allocator]
+static ALLOCATOR: cltrace::huge_pages::HugePages = cltrace::huge_pages::HugePages;
+
 fn main() -> ExitCode {
     // The first Ctrl-C (or SIGTERM) asks the work to stop at its next band, sample pass or
     // measurement and keep what it has (src/interrupt.rs); a second one ends the process.

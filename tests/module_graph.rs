@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[&[&str]] = &[
     // Pure values: no I/O, no OpenCL, no command line.
     &["error", "geometry", "hash"],
-    &["mesh", "camera", "interrupt"],
+    &["mesh", "camera", "interrupt", "huge_pages"],
     &["intersect", "animation"],
     &["material", "light"],
     &["brute", "bvh"],
