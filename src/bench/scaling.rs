@@ -150,23 +150,7 @@ pub(crate) fn plot_scaling(rows: &[BenchRow], path: &Path) -> Result<()> {
             .x_label_formatter(&|n| count(*n))
             .draw()
             .map_err(|e| fail(&e))?;
-        for (i, (label, points)) in memory.into_iter().enumerate() {
-            let color = Palette99::pick(i).to_rgba();
-            chart
-                .draw_series(LineSeries::new(points, color.stroke_width(2)).point_size(4))
-                .map_err(|e| fail(&e))?
-                .label(label)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                });
-        }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::LowerLeft)
-            .draw()
-            .map_err(|e| fail(&e))?;
+        draw_lines(&mut chart, memory).map_err(|e| fail(&e))?;
 
         let max_rate = rows
             .iter()
@@ -188,24 +172,7 @@ pub(crate) fn plot_scaling(rows: &[BenchRow], path: &Path) -> Result<()> {
             .y_label_formatter(&|v| format!("{v}"))
             .draw()
             .map_err(|e| fail(&e))?;
-        for (i, series) in series_by_target(rows).into_iter().enumerate() {
-            let color = Palette99::pick(i).to_rgba();
-            let label = series.0.clone();
-            chart
-                .draw_series(LineSeries::new(series.1, color.stroke_width(2)).point_size(4))
-                .map_err(|e| fail(&e))?
-                .label(label)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                });
-        }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::LowerLeft)
-            .draw()
-            .map_err(|e| fail(&e))?;
+        draw_lines(&mut chart, series_by_target(rows)).map_err(|e| fail(&e))?;
         root.present().map_err(|e| fail(&e))?;
     }
     let image = image::RgbImage::from_raw(width, height, pixels).expect("buffer matches the size");
@@ -215,6 +182,30 @@ pub(crate) fn plot_scaling(rows: &[BenchRow], path: &Path) -> Result<()> {
             .write_to(w, image::ImageFormat::Png)
             .map_err(|e| Error::output(path, e))
     })
+}
+
+/// Draws each named series as a line of its own colour, with a legend in the lower left.
+fn draw_lines<'a, Y: Ranged<ValueType = f64>>(
+    chart: &mut ChartContext<'a, BitMapBackend<'a>, Cartesian2d<LogCoord<f64>, Y>>,
+    series: Vec<(String, Vec<(f64, f64)>)>,
+) -> std::result::Result<(), String> {
+    for (i, (label, points)) in series.into_iter().enumerate() {
+        let color = Palette99::pick(i).to_rgba();
+        chart
+            .draw_series(LineSeries::new(points, color.stroke_width(2)).point_size(4))
+            .map_err(|e| e.to_string())?
+            .label(label)
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+            });
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::LowerLeft)
+        .draw()
+        .map_err(|e| e.to_string())
 }
 
 /// `10k`, `1M`: axis labels for triangle counts.
