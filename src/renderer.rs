@@ -291,7 +291,7 @@ impl<'d> Renderer<'d> {
                     }
                     Ok(t)
                 })?;
-                let b = laid.nodes.bytes().len() + laid.triangles.len() * size_of::<Triangle>();
+                let b = laid.device_bytes();
                 if let Some(s) = bvh.as_mut() {
                     s.sah_cost = laid.sah_cost;
                 }

@@ -8,15 +8,15 @@ use plotters::prelude::*;
 
 use super::{BenchRequest, BenchRow};
 use crate::error::{Error, Result};
-use crate::input::generate::Generator;
+use crate::input::generate::{Generator, MAX_RESOLUTION};
 use crate::output::write_atomically;
 use crate::render::Method;
 
 /// The smallest hillside of the study, in triangles.
 const SMALLEST: u64 = 10_000;
 
-/// The largest hillside the generators make: resolution 32767, `2 r^2` triangles.
-pub(crate) const LARGEST: u64 = 2 * 32767 * 32767;
+/// The largest hillside the generators make: `2 r^2` triangles at the largest resolution.
+pub(crate) const LARGEST: u64 = 2 * MAX_RESOLUTION as u64 * MAX_RESOLUTION as u64;
 
 /// The triangle counts measured up to `to`: every power of ten from 10 thousand, then `to`
 /// itself. Counts outside [10 thousand, [`LARGEST`]] are an error.

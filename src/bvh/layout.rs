@@ -208,9 +208,13 @@ impl DeviceLayout {
         }
     }
 
+    /// Bytes the device holds for the scene: nodes and triangles.
+    pub(crate) fn device_bytes(&self) -> usize {
+        self.nodes.bytes().len() + self.triangles.len() * size_of::<Triangle>()
+    }
+
     /// Bytes the device holds per triangle (nodes and triangles together).
     pub(crate) fn bytes_per_triangle(&self) -> f64 {
-        (self.nodes.bytes().len() + self.triangles.len() * size_of::<Triangle>()) as f64
-            / self.triangles.len() as f64
+        self.device_bytes() as f64 / self.triangles.len() as f64
     }
 }

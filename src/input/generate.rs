@@ -97,6 +97,10 @@ const MAX_TRIANGLES: u64 = 1 << 31;
 /// one of 300 million at 85.4 GiB (306); with `--crease-angle 0`, 17.0 GiB for 100 million.
 const HOST_BYTES_PER_TRIANGLE: u64 = 320;
 
+/// The most cells along a side of the landscape and the hillside: `2 r^2` triangles stay
+/// under [`MAX_TRIANGLES`].
+pub(crate) const MAX_RESOLUTION: u32 = 32767;
+
 impl Generator {
     /// The default scene's mesh.
     pub(crate) fn default_scene() -> Self {
@@ -237,9 +241,9 @@ impl Generator {
                 return bad("triangles", "at least 1");
             }
             Generator::Landscape { resolution, .. } | Generator::Hillside { resolution, .. }
-                if resolution == 0 || resolution > 32767 =>
+                if resolution == 0 || resolution > MAX_RESOLUTION =>
             {
-                return bad("resolution", "between 1 and 32767");
+                return bad("resolution", &format!("between 1 and {MAX_RESOLUTION}"));
             }
             _ => {}
         }
