@@ -1,7 +1,7 @@
 /* integrator.cl: the progressive shade modes (ambient occlusion, a light with hard
- * shadows, path tracing through cl/bsdf.cl's models), one sample per pixel per launch, added to a pitched
- * long4 accumulation image (fixed-point radiance sums, and the sample count in w) over a
- * region of the image. Mirrored by
+ * shadows, path tracing through cl/bsdf.cl's models), sample_count samples per pixel per
+ * launch, added to a pitched long4 accumulation image (fixed-point radiance sums, and the
+ * sample count in w) over a region of the image. Mirrored by
  * src/render/integrator.rs, whence SHADOW_AMBIENT and ROULETTE_AFTER come. Compiled, like
  * trace.cl, against a BVH or every triangle, into programs built with sampling; the host
  * binds the parameters by name (src/device/tracer.rs; tests/layout.rs compares them). Each
@@ -39,7 +39,7 @@ FORCE_INLINE float3 sky(float3 d) {
  * launch covers columns [col0, col_end) and rows [global offset, row_end); the
  * accumulation image's pixel (0, 0) is image pixel (col0, row0). */
 #define SAMPLE_PARAMS SCENE_PARAMS, LIGHT_PARAMS, CAMERA_BAND_PARAMS, \
-    float offset, uint seed, uint sample, \
+    float offset, uint seed, uint sample, uint sample_count, \
     uint ao_samples, float ao_distance, float4 light, uint max_bounces, \
     __global long4* accum, __global uint* rays, uint accum_pitch, uint col0, uint col_end
 
@@ -51,24 +51,27 @@ FORCE_INLINE long to_fixed(float v) {
     return convert_long_rte(v * RADIANCE_SCALE);
 }
 
-FORCE_INLINE void add_sample(__global long4* accum, __global uint* rays, uint accum_pitch,
-                       uint x, uint row, float3 radiance, uint ray_count) {
+FORCE_INLINE long3 fixed3(float3 radiance) {
+    return (long3)(to_fixed(radiance.x), to_fixed(radiance.y), to_fixed(radiance.z));
+}
+
+/* A work-item's sums of its launch's samples, added to its pixel's once. */
+FORCE_INLINE void add_samples(__global long4* accum, __global uint* rays, uint accum_pitch,
+                              uint x, uint row, long3 sums, uint samples, uint ray_count) {
     uint i = row * accum_pitch + x;
-    accum[i] += (long4)(to_fixed(radiance.x), to_fixed(radiance.y), to_fixed(radiance.z), 1);
+    accum[i] += (long4)(sums, (long)samples);
     rays[i] += ray_count;
 }
 
-/* What every sample kernel starts with: the work-item's pixel (leaving at once outside the
- * band) and its stream of random numbers. */
+/* What every sample kernel starts with: the work-item's pixel, leaving at once outside the
+ * band. Sample s of the launch draws from the stream sampler_key(seed, pixel, sample + s). */
 #define SAMPLE_PIXEL                                                     \
     uint x = get_global_id(0), y = get_global_id(1);                     \
-    if (x < col0 || x >= col_end || y < row0 || y >= row_end) return;   \
-    uint key = sampler_key(seed, y * width + x, sample);
+    if (x < col0 || x >= col_end || y < row0 || y >= row_end) return;
 
-/* SAMPLE_PIXEL, then the closest hit of the pixel's jittered camera ray (from org along
- * dir): where the ambient occlusion and shadow samples start from. */
+/* The closest hit of the jittered camera ray (from org along dir) of the sample whose
+ * stream is key: where the ambient occlusion and shadow samples start from. */
 #define SAMPLE_CAMERA_HIT                                                \
-    SAMPLE_PIXEL                                                         \
     float3 org;                                                          \
     float3 dir = jittered_ray(CAMERA, x, y, key, &org);                  \
     float t;                                                             \
@@ -85,44 +88,58 @@ FORCE_INLINE float camera_cone(float4 du, float t) { return t * length3(du.xyz);
 
 #ifdef KERNEL_SAMPLE_AO
 __kernel void sample_ao(SAMPLE_PARAMS) {
-    SAMPLE_CAMERA_HIT
-    float3 radiance = (float3)(0.0f);
-    uint count = 1;
-    if (hit != MISS) {
-        SurfacePoint sp = surface_point(SURFACE, &tris[hit], org, dir, t, offset, camera_cone(du, t));
-        uint open = 0;
-        for (uint k = 0; k < ao_samples; ++k) {
-            float3 d = cosine_direction(sp.ns, sample_1d(key, bounce_dim(0) + 2 * k), sample_1d(key, bounce_dim(0) + 2 * k + 1));
-            /* Below the geometric surface a shading-normal direction is blocked. */
-            open += dot3(d, sp.ng) > 0.0f && !occluded(SCENE, sp.origin, d, ao_distance);
+    SAMPLE_PIXEL
+    long3 sums = (long3)(0);
+    uint count = 0;
+    for (uint s = 0; s < sample_count; ++s) {
+        uint key = sampler_key(seed, y * width + x, sample + s);
+        SAMPLE_CAMERA_HIT
+        float3 radiance = (float3)(0.0f);
+        count += 1;
+        if (hit != MISS) {
+            SurfacePoint sp = surface_point(SURFACE, &tris[hit], org, dir, t, offset, camera_cone(du, t));
+            uint open = 0;
+            for (uint k = 0; k < ao_samples; ++k) {
+                float3 d = cosine_direction(sp.ns, sample_1d(key, bounce_dim(0) + 2 * k), sample_1d(key, bounce_dim(0) + 2 * k + 1));
+                /* Below the geometric surface a shading-normal direction is blocked. */
+                open += dot3(d, sp.ng) > 0.0f && !occluded(SCENE, sp.origin, d, ao_distance);
+            }
+            count += ao_samples;
+            radiance = (float3)((float)open / (float)max(ao_samples, 1u));
         }
-        count += ao_samples;
-        radiance = (float3)((float)open / (float)max(ao_samples, 1u));
+        sums += fixed3(radiance);
     }
-    add_sample(accum, rays, accum_pitch, x - col0, y - row0, radiance, count);
+    add_samples(accum, rays, accum_pitch, x - col0, y - row0, sums, sample_count, count);
 }
 #endif
 
 #ifdef KERNEL_SAMPLE_SHADOW
 __kernel void sample_shadow(SAMPLE_PARAMS) {
-    SAMPLE_CAMERA_HIT
-    float3 radiance = (float3)(0.0f);
-    uint count = 1;
-    if (hit != MISS) {
-        SurfacePoint sp = surface_point(SURFACE, &tris[hit], org, dir, t, offset, camera_cone(du, t));
-        float3 origin = sp.origin;
-        /* light.w: 0 for a direction towards the light, 1 for the light's position. */
-        float3 l = light.w == 0.0f ? normalize(light.xyz) : normalize(light.xyz - origin);
-        float reach = light.w == 0.0f ? INFINITY : length(light.xyz - origin);
-        float c = dot(sp.ns, l);
-        float direct = 0.0f;
-        if (c > 0.0f && dot3(l, sp.ng) > 0.0f) {
-            count += 1;
-            if (!occluded(SCENE, origin, l, reach)) direct = c;
+    SAMPLE_PIXEL
+    long3 sums = (long3)(0);
+    uint count = 0;
+    for (uint s = 0; s < sample_count; ++s) {
+        uint key = sampler_key(seed, y * width + x, sample + s);
+        SAMPLE_CAMERA_HIT
+        float3 radiance = (float3)(0.0f);
+        count += 1;
+        if (hit != MISS) {
+            SurfacePoint sp = surface_point(SURFACE, &tris[hit], org, dir, t, offset, camera_cone(du, t));
+            float3 origin = sp.origin;
+            /* light.w: 0 for a direction towards the light, 1 for the light's position. */
+            float3 l = light.w == 0.0f ? normalize(light.xyz) : normalize(light.xyz - origin);
+            float reach = light.w == 0.0f ? INFINITY : length(light.xyz - origin);
+            float c = dot(sp.ns, l);
+            float direct = 0.0f;
+            if (c > 0.0f && dot3(l, sp.ng) > 0.0f) {
+                count += 1;
+                if (!occluded(SCENE, origin, l, reach)) direct = c;
+            }
+            radiance = sp.albedo * (SHADOW_AMBIENT + (1.0f - SHADOW_AMBIENT) * direct) + sp.emission;
         }
-        radiance = sp.albedo * (SHADOW_AMBIENT + (1.0f - SHADOW_AMBIENT) * direct) + sp.emission;
+        sums += fixed3(radiance);
     }
-    add_sample(accum, rays, accum_pitch, x - col0, y - row0, radiance, count);
+    add_samples(accum, rays, accum_pitch, x - col0, y - row0, sums, sample_count, count);
 }
 #endif
 
@@ -159,170 +176,198 @@ FORCE_INLINE float3 scatter_from(const Shading* sh, bool lambert, float3 n, floa
 }
 
 #ifdef KERNEL_SAMPLE_PATH
+/* The launch's samples of a pixel are traced one path after another in one loop, each turn
+ * of which traces one ray of the current path: a work-item whose path ends starts its next
+ * sample in the next turn (path regeneration), so that the work-items of a SIMD group keep
+ * tracing together instead of waiting, sample by sample, for their longest path. */
 __kernel void sample_path(SAMPLE_PARAMS) {
     SAMPLE_PIXEL
+    long3 sums = (long3)(0);
+    uint rays_traced = 0;
+    uint s = 0;
+    uint key = sampler_key(seed, y * width + x, sample);
     float3 org;
     float3 dir = jittered_ray(CAMERA, x, y, key, &org);
     float3 radiance = (float3)(0.0f), throughput = (float3)(1.0f);
     uint count = 1;
-    float t;
-    uint hit;
     /* The ray cone's width at the last hit (0 at the eye), for texture filtering. */
     float cone = 0.0f;
     /* The density of the last bounce's direction, to weigh an emitter it hits against
      * light sampling (the power heuristic); 0 where light sampling could not have found
      * it: camera rays, delta lobes, light through the surface. */
     float last_pdf = 0.0f;
-    for (uint bounce = 0;; ++bounce) {
+    uint bounce = 0;
+    for (;;) {
         /* One call site for the camera ray and every bounce: each inlined traversal costs
          * compile time, and on the H200 the one site also ran 1.4-4.4% faster
          * (docs/bench/2026-12-04-first-image.md). */
-        hit = trace(SCENE, org, dir, INFINITY, false, true, &t);
-        if (hit == MISS) {
+        float t;
+        uint hit = trace(SCENE, org, dir, INFINITY, false, true, &t);
+        /* The path goes on past this vertex; every break below ends it. */
+        bool goes_on = false;
+        do {
+            if (hit == MISS) {
 #if defined(ENVIRONMENT)
-            float env_pdf;
-            float3 le = env_radiance(ENV, normalize(dir), &env_pdf);
-            /* Weighed against the environment's light samples, which could have found it. */
-            if (last_pdf > 0.0f) {
-                float r = env_pdf / last_pdf;
-                le *= 1.0f / (1.0f + r * r);
-            }
-            radiance += throughput * le;
+                float env_pdf;
+                float3 le = env_radiance(ENV, normalize(dir), &env_pdf);
+                /* Weighed against the environment's light samples, which could have found it. */
+                if (last_pdf > 0.0f) {
+                    float r = env_pdf / last_pdf;
+                    le *= 1.0f / (1.0f + r * r);
+                }
+                radiance += throughput * le;
 #elif !defined(PUNCTUAL)
-            if (emitter_count == 0) radiance += throughput * sky(dir);
+                if (emitter_count == 0) radiance += throughput * sky(dir);
 #endif
-            break;
-        }
-        const __global Triangle* tri = &tris[hit];
-        cone = bounce == 0 ? camera_cone(du, t) : cone + BOUNCE_CONE_SPREAD * t;
-        SurfacePoint sp = surface_point(SURFACE, tri, org, dir, t, offset, cone);
+                break;
+            }
+            const __global Triangle* tri = &tris[hit];
+            cone = bounce == 0 ? camera_cone(du, t) : cone + BOUNCE_CONE_SPREAD * t;
+            SurfacePoint sp = surface_point(SURFACE, tri, org, dir, t, offset, cone);
 #ifdef MIS
-        if (last_pdf > 0.0f && max3(sp.emission) > 0.0f) {
-            /* dir is a unit vector after the camera ray, so t is the distance. */
-            float r = t * t * emitter_density(materials, tri, emitter_power)
-                    / fabs(dot3(sp.ng, dir)) / last_pdf;
-            radiance += throughput * sp.emission * (1.0f / (1.0f + r * r));
-        } else if (last_pdf == 0.0f) {
-            radiance += throughput * sp.emission;
-        }
-        /* The last bounce's direction was traced only for the emitter it might hit. */
-        if (bounce > max_bounces) break;
+            if (last_pdf > 0.0f && max3(sp.emission) > 0.0f) {
+                /* dir is a unit vector after the camera ray, so t is the distance. */
+                float r = t * t * emitter_density(materials, tri, emitter_power)
+                        / fabs(dot3(sp.ng, dir)) / last_pdf;
+                radiance += throughput * sp.emission * (1.0f / (1.0f + r * r));
+            } else if (last_pdf == 0.0f) {
+                radiance += throughput * sp.emission;
+            }
+            /* The last bounce's direction was traced only for the emitter it might hit. */
+            if (bounce > max_bounces) break;
 #else
-        /* Lambertian scenes: after the camera ray, emitters are reached by light samples
-         * alone (no MIS), which for diffuse bounces off small lights loses nothing and
-         * saves the weights and the last bounce's ray. */
-        if (bounce == 0) radiance += throughput * sp.emission;
+            /* Lambertian scenes: after the camera ray, emitters are reached by light samples
+             * alone (no MIS), which for diffuse bounces off small lights loses nothing and
+             * saves the weights and the last bounce's ray. */
+            if (bounce == 0) radiance += throughput * sp.emission;
 #endif
-        Shading sh = shading_at(&materials[tri->material], &sp);
-        /* Lambert alone takes the short way, without a local frame. Programs of scenes whose
-         * every material is Lambertian leave the other models out (BSDFS undefined): they
-         * cost registers, and so speed, even where no ray reaches them. */
+            Shading sh = shading_at(&materials[tri->material], &sp);
+            /* Lambert alone takes the short way, without a local frame. Programs of scenes whose
+             * every material is Lambertian leave the other models out (BSDFS undefined): they
+             * cost registers, and so speed, even where no ray reaches them. */
 #ifdef BSDFS
-        bool lambert = sh.bsdf == BSDF_DIFFUSE && sh.metallic <= 0.0f;
+            bool lambert = sh.bsdf == BSDF_DIFFUSE && sh.metallic <= 0.0f;
 #else
-        const bool lambert = true;
+            const bool lambert = true;
 #endif
-        float3 origin = sp.origin;
-        float3 n = sp.ns;
-        float3 tn = (float3)(0.0f), bn = (float3)(0.0f), wo_l = (float3)(0.0f);
-        if (!lambert) {
-            basis(n, &tn, &bn);
-            float3 wo = -normalize(dir);
-            wo_l = (float3)(dot(wo, tn), dot(wo, bn), dot(wo, n));
-        }
-        uint d = bounce_dim(bounce);
-        bool lit = lambert || !shading_all_delta(&sh);
-        if (emitter_count > 0 && lit) {
-            const __global Triangle* e = &tris[emitters[cdf_find(emitter_cdf, emitter_count, sample_1d(key, d))]];
-            float u1 = sample_1d(key, d + 1), u2 = sample_1d(key, d + 2);
-            float3 q = triangle_point(load3(e->v0), load3(e->v1), load3(e->v2), u1, u2);
-            float3 w = q - origin;
-            float d2 = dot(w, w);
-            float3 l = w / sqrt(d2);
-            float cos_there = dot(emitting_normal(e, l), -l);
-            if (cos_there > 0.0f && dot3(l, sp.ng) > 0.0f) {
-                float bsdf_pdf;
-                float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
-                if (max3(f) > 0.0f) {
-                    count += 1;
-                    if (!occluded(SCENE, origin, l, sqrt(d2) * (1.0f - 1e-4f))) {
-                        float su = sqrt(u1);
-                        float light_pdf = d2 * emitter_density(materials, e, emitter_power) / cos_there;
+            float3 origin = sp.origin;
+            float3 n = sp.ns;
+            float3 tn = (float3)(0.0f), bn = (float3)(0.0f), wo_l = (float3)(0.0f);
+            if (!lambert) {
+                basis(n, &tn, &bn);
+                float3 wo = -normalize(dir);
+                wo_l = (float3)(dot(wo, tn), dot(wo, bn), dot(wo, n));
+            }
+            uint d = bounce_dim(bounce);
+            bool lit = lambert || !shading_all_delta(&sh);
+            if (emitter_count > 0 && lit) {
+                const __global Triangle* e = &tris[emitters[cdf_find(emitter_cdf, emitter_count, sample_1d(key, d))]];
+                float u1 = sample_1d(key, d + 1), u2 = sample_1d(key, d + 2);
+                float3 q = triangle_point(load3(e->v0), load3(e->v1), load3(e->v2), u1, u2);
+                float3 w = q - origin;
+                float d2 = dot(w, w);
+                float3 l = w / sqrt(d2);
+                float cos_there = dot(emitting_normal(e, l), -l);
+                if (cos_there > 0.0f && dot3(l, sp.ng) > 0.0f) {
+                    float bsdf_pdf;
+                    float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
+                    if (max3(f) > 0.0f) {
+                        count += 1;
+                        if (!occluded(SCENE, origin, l, sqrt(d2) * (1.0f - 1e-4f))) {
+                            float su = sqrt(u1);
+                            float light_pdf = d2 * emitter_density(materials, e, emitter_power) / cos_there;
 #ifdef MIS
-                        float r = bsdf_pdf / light_pdf;
-                        float weight = 1.0f / (1.0f + r * r);
+                            float r = bsdf_pdf / light_pdf;
+                            float weight = 1.0f / (1.0f + r * r);
 #else
-                        float weight = 1.0f;
+                            float weight = 1.0f;
 #endif
-                        radiance += throughput * f * emitted(SURFACE, e, 1.0f - su, u2 * su) * (weight / light_pdf);
+                            radiance += throughput * f * emitted(SURFACE, e, 1.0f - su, u2 * su) * (weight / light_pdf);
+                        }
                     }
                 }
             }
-        }
 #ifdef ENVIRONMENT
-        if (lit) {
-            float3 l;
-            float env_pdf;
-            float3 le = env_sample(ENV, sample_1d(key, d + 8), sample_1d(key, d + 9), &l, &env_pdf);
-            if (env_pdf > 0.0f && dot3(l, sp.ng) > 0.0f) {
-                float bsdf_pdf;
-                float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
-                if (max3(f) > 0.0f) {
-                    count += 1;
-                    if (!occluded(SCENE, origin, l, INFINITY)) {
-                        float r = bsdf_pdf / env_pdf;
-                        radiance += throughput * f * le * (1.0f / (1.0f + r * r) / env_pdf);
+            if (lit) {
+                float3 l;
+                float env_pdf;
+                float3 le = env_sample(ENV, sample_1d(key, d + 8), sample_1d(key, d + 9), &l, &env_pdf);
+                if (env_pdf > 0.0f && dot3(l, sp.ng) > 0.0f) {
+                    float bsdf_pdf;
+                    float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
+                    if (max3(f) > 0.0f) {
+                        count += 1;
+                        if (!occluded(SCENE, origin, l, INFINITY)) {
+                            float r = bsdf_pdf / env_pdf;
+                            radiance += throughput * f * le * (1.0f / (1.0f + r * r) / env_pdf);
+                        }
                     }
                 }
             }
-        }
 #endif
 #ifdef PUNCTUAL
-        /* Every punctual light, each by one shadow ray: nothing else can find them. */
-        for (uint k = 0; lit && k < punctual_count; ++k) {
-            float3 l;
-            float reach;
-            float3 e = punctual_incident(punctual, k, origin, &l, &reach);
-            if (max3(e) > 0.0f && dot3(l, sp.ng) > 0.0f) {
-                float bsdf_pdf;
-                float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
-                if (max3(f) > 0.0f) {
-                    count += 1;
-                    if (!occluded(SCENE, origin, l, reach * (1.0f - 1e-4f))) radiance += throughput * f * e;
+            /* Every punctual light, each by one shadow ray: nothing else can find them. */
+            for (uint k = 0; lit && k < punctual_count; ++k) {
+                float3 l;
+                float reach;
+                float3 e = punctual_incident(punctual, k, origin, &l, &reach);
+                if (max3(e) > 0.0f && dot3(l, sp.ng) > 0.0f) {
+                    float bsdf_pdf;
+                    float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
+                    if (max3(f) > 0.0f) {
+                        count += 1;
+                        if (!occluded(SCENE, origin, l, reach * (1.0f - 1e-4f))) radiance += throughput * f * e;
+                    }
                 }
             }
-        }
 #endif
 #ifndef MIS
-        if (bounce == max_bounces) break;
+            if (bounce == max_bounces) break;
 #endif
-        float u1 = sample_1d(key, d + 4), u2 = sample_1d(key, d + 5);
-        BsdfSample bs;
-        if (lambert) {
-            bs.wi = cosine_direction(n, u1, u2);
-            bs.weight = sh.albedo;
-            bs.pdf = fmax(dot(bs.wi, n), 0.0f) / M_PI_F;
-            bs.delta = false;
-            bs.transmitted = false;
-        } else {
-            if (!bsdf_sample(&sh, wo_l, sample_1d(key, d + 6), u1, u2, sample_1d(key, d + 7), &bs)) break;
-            bs.wi = tn * bs.wi.x + bn * bs.wi.y + n * bs.wi.z;
+            float u1 = sample_1d(key, d + 4), u2 = sample_1d(key, d + 5);
+            BsdfSample bs;
+            if (lambert) {
+                bs.wi = cosine_direction(n, u1, u2);
+                bs.weight = sh.albedo;
+                bs.pdf = fmax(dot(bs.wi, n), 0.0f) / M_PI_F;
+                bs.delta = false;
+                bs.transmitted = false;
+            } else {
+                if (!bsdf_sample(&sh, wo_l, sample_1d(key, d + 6), u1, u2, sample_1d(key, d + 7), &bs)) break;
+                bs.wi = tn * bs.wi.x + bn * bs.wi.y + n * bs.wi.z;
+            }
+            throughput *= bs.weight;
+            if (bounce >= ROULETTE_AFTER) {
+                float keep = fmin(max3(throughput), 0.95f);
+                if (sample_1d(key, d + 3) >= keep) break;
+                throughput /= keep;
+            }
+            /* A reflected direction below the geometric surface would leave through it, a
+             * refracted one above it would not. */
+            float side = dot3(bs.wi, sp.ng);
+            if (bs.transmitted ? side >= 0.0f : side <= 0.0f) break;
+            org = bs.transmitted ? sp.through : origin;
+            dir = bs.wi;
+            last_pdf = bs.delta || bs.transmitted ? 0.0f : bs.pdf;
+            count += 1;
+            goes_on = true;
+        } while (false);
+        if (goes_on) {
+            ++bounce;
+            continue;
         }
-        throughput *= bs.weight;
-        if (bounce >= ROULETTE_AFTER) {
-            float keep = fmin(max3(throughput), 0.95f);
-            if (sample_1d(key, d + 3) >= keep) break;
-            throughput /= keep;
-        }
-        /* A reflected direction below the geometric surface would leave through it, a
-         * refracted one above it would not. */
-        float side = dot3(bs.wi, sp.ng);
-        if (bs.transmitted ? side >= 0.0f : side <= 0.0f) break;
-        org = bs.transmitted ? sp.through : origin;
-        dir = bs.wi;
-        last_pdf = bs.delta || bs.transmitted ? 0.0f : bs.pdf;
-        count += 1;
+        sums += fixed3(radiance);
+        rays_traced += count;
+        if (++s == sample_count) break;
+        key = sampler_key(seed, y * width + x, sample + s);
+        dir = jittered_ray(CAMERA, x, y, key, &org);
+        radiance = (float3)(0.0f);
+        throughput = (float3)(1.0f);
+        count = 1;
+        cone = 0.0f;
+        last_pdf = 0.0f;
+        bounce = 0;
     }
-    add_sample(accum, rays, accum_pitch, x - col0, y - row0, radiance, count);
+    add_samples(accum, rays, accum_pitch, x - col0, y - row0, sums, sample_count, rays_traced);
 }
 #endif

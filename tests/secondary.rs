@@ -401,6 +401,77 @@ fn every_bsdf_path_traces_on_the_device_as_on_the_host() {
     });
 }
 
+/// A launch of many samples, in which each work-item traces its pixel's paths one after
+/// another in one loop (path regeneration), sums to exactly what launches of one sample each
+/// do, in every shade mode and with a scattering model's program too: every sample stays the
+/// one it was.
+#[test]
+fn launches_of_many_samples_sum_as_launches_of_one() {
+    use cltrace::render::integrator::Light;
+    on_every_device(|device| {
+        let (room, lambert) = lit_room();
+        let mut glass = lambert.clone();
+        glass.list[2] = Material::with_bsdf(cltrace::material::Bsdf::Dielectric, [0.9; 3], 0.0);
+        // The light in view, where a camera ray's weight differs from a bounce's.
+        let cam = camera(&room, [0.0, -0.2, 0.9], [0.0, 0.4, -0.3], 90.0, (24, 16));
+        let modes = [
+            ("paths", &lambert, Lighting::Path { max_bounces: 6 }),
+            (
+                "paths through glass",
+                &glass,
+                Lighting::Path { max_bounces: 6 },
+            ),
+            (
+                "ambient occlusion",
+                &lambert,
+                Lighting::Ao {
+                    samples: 2,
+                    distance: 0.5,
+                },
+            ),
+            (
+                "a point light",
+                &lambert,
+                Lighting::Shadow {
+                    light: Light::Point(Vec3::new(0.0, 0.4, 0.0)),
+                },
+            ),
+        ];
+        for (name, materials, lighting) in modes {
+            let options = prepare(Layout::default(), false);
+            let mut renderer = Renderer::prepare(
+                Method::ClBvh,
+                &room,
+                materials,
+                &options,
+                Some(device),
+                &mut Timings::default(),
+            )
+            .unwrap();
+            let settings = SampleSettings {
+                lighting,
+                offset: 1e-4 * room.bounds().extent().length(),
+                seed: 3,
+            };
+            let stop = AtomicBool::new(false);
+            let spp = 12;
+            let mut together = Accumulation::new(cam.width, cam.height);
+            renderer
+                .render_samples(&cam, &settings, 0..spp, &mut together, &stop, false)
+                .unwrap();
+            let mut apart = Accumulation::new(cam.width, cam.height);
+            for s in 0..spp {
+                renderer
+                    .render_samples(&cam, &settings, s..s + 1, &mut apart, &stop, false)
+                    .unwrap();
+            }
+            assert!(together.pixels.iter().all(|p| p[3] == spp as i64));
+            assert!(together.pixels == apart.pixels, "{name}: the sums differ");
+            assert_eq!(together.rays, apart.rays, "{name}");
+        }
+    });
+}
+
 #[test]
 fn brute_force_and_every_bvh_layout_give_the_same_samples() {
     on_every_device(|device| {

@@ -102,6 +102,8 @@ pub struct DeviceInfo {
     pub(crate) base_address_alignment: usize,
     /// Whether `-cl-fp32-correctly-rounded-divide-sqrt` is honoured.
     pub(crate) correctly_rounded_divide: bool,
+    /// Whether NVIDIA's `-cl-nv-*` build options are taken (`cl_nv_compiler_options`).
+    pub(crate) nv_compiler_options: bool,
     pub(crate) platform: ocl::Platform,
     pub(crate) device: ocl::Device,
 }
@@ -185,6 +187,10 @@ impl DeviceInfo {
             },
             base_address_alignment: (number(info(Info::MemBaseAddrAlign)?) / 8) as usize,
             correctly_rounded_divide,
+            nv_compiler_options: match info(Info::Extensions)? {
+                R::Extensions(s) => s.split_whitespace().any(|e| e == "cl_nv_compiler_options"),
+                _ => false,
+            },
             platform,
             device,
         })

@@ -22,6 +22,12 @@ use crate::material::surface::SurfaceFeatures;
 const KERNEL_DIR_VAR: &str = "CLTRACE_KERNEL_DIR";
 /// Extra OpenCL build options, appended to cltrace's own (development, e.g. vendor flags).
 const BUILD_OPTIONS_VAR: &str = "CLTRACE_BUILD_OPTIONS";
+/// The most registers a work-item of a program of sample kernels may use on devices that
+/// take NVIDIA's build options. The path tracer asked for 112-137, which leaves too few
+/// paths resident to hide memory latency; capped, it spills a little (to cached local
+/// memory) and on the H200 ran 1.1-1.2x faster (56 was the best of 40 to 80 over a
+/// diffuse box, a conductor and a glass scene; docs/bench/2026-12-04-gpu-path.md).
+const NV_SAMPLE_REGISTERS: u32 = 56;
 /// When set, every successful build's log goes to stderr too (development: with
 /// `-cl-nv-verbose` NVIDIA's log gives each kernel's registers and spills).
 const BUILD_LOG_VAR: &str = "CLTRACE_BUILD_LOG";
@@ -364,7 +370,12 @@ impl ClDevice {
             Some(layout) => format!("{} ({})", kernels.names(), layout.name()),
             None => format!("{} (brute force)", kernels.names()),
         };
-        let options = self.build_options(&defines, extra_options);
+        let mut extra = String::new();
+        if kernels.only_sampling() && self.info.nv_compiler_options {
+            extra.push_str(&format!("-cl-nv-maxrregcount={NV_SAMPLE_REGISTERS} "));
+        }
+        extra.push_str(extra_options);
+        let options = self.build_options(&defines, extra.trim_end());
         let source = program_source(&program_files(layout, sampling));
         let Some(cache) = &self.program_cache else {
             let program = self.build_source(&label, &source, &options)?;

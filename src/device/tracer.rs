@@ -40,11 +40,11 @@ pub enum Kernel {
     TracePrimaryGeneral,
     /// `trace_rays`: a list of arbitrary rays, closest or any hit (the diffuse rays).
     TraceRays,
-    /// `sample_ao`: one ambient occlusion sample per pixel of a band.
+    /// `sample_ao`: ambient occlusion samples of each pixel of a band.
     SampleAo,
-    /// `sample_shadow`: one sample per pixel of a band under one light, with hard shadows.
+    /// `sample_shadow`: samples of each pixel of a band under one light, with hard shadows.
     SampleShadow,
-    /// `sample_path`: one path-traced sample per pixel of a band.
+    /// `sample_path`: path-traced samples of each pixel of a band.
     SamplePath,
 }
 
@@ -153,6 +153,11 @@ impl Kernels {
     /// cl/integrator.cl and the files it uses).
     pub fn has_sampling(self) -> bool {
         self.iter().any(Kernel::is_sampling)
+    }
+
+    /// Whether every one of these (at least one) is a progressive shade mode's kernel.
+    pub(crate) fn only_sampling(self) -> bool {
+        self.has_sampling() && self.iter().all(Kernel::is_sampling)
     }
 
     /// The kernels, in [`Kernel::ALL`]'s order.
@@ -325,14 +330,15 @@ struct SampleValues {
 impl SampleValues {
     fn params<'a>(
         &self,
-        sample: u32,
+        samples: std::ops::Range<u32>,
         accum: &'a PitchedBuffer<Long4>,
         rays: &'a ocl::Buffer<u32>,
     ) -> SampleParams<'a> {
         SampleParams {
             offset: self.offset,
             seed: self.seed,
-            sample,
+            sample: samples.start,
+            sample_count: samples.len() as u32,
             ao_samples: self.ao_samples,
             ao_distance: self.ao_distance,
             light: self.light,
@@ -399,6 +405,7 @@ kernel_params! {
         offset: f32,
         seed: u32,
         sample: u32,
+        sample_count: u32,
         ao_samples: u32,
         ao_distance: f32,
         light: Float4,
@@ -564,6 +571,16 @@ impl BandPlanner {
             None => self.first_band_pixels,
         };
         (pixels / width).clamp(1, remaining)
+    }
+
+    /// How many of `remaining` samples one launch over `pixels` pixels takes: as many as
+    /// fit the target, at least one.
+    fn next_samples(&self, pixels: usize, remaining: u32) -> u32 {
+        let fit = match self.rate {
+            Some(rate) => (rate * LAUNCH_TARGET_MS / pixels.max(1) as f64) as u32,
+            None => 1,
+        };
+        fit.clamp(1, remaining.max(1))
     }
 
     fn learn(&mut self, pixels: usize, ms: f64) {
@@ -868,7 +885,7 @@ impl<'d> ClTracer<'d> {
             name,
         } = self.sample_setup(camera, settings, width, region, capacity)?;
         let pitch = accum.pitch;
-        let mut params = values.params(0, &accum, &rays);
+        let mut params = values.params(0..1, &accum, &rays);
         let set = |band: &BandParams, params: &SampleParams| {
             band.set(&kernel)
                 .and_then(|()| params.set(&kernel))
@@ -894,8 +911,21 @@ impl<'d> ClTracer<'d> {
             band.row0 = (y0 + group0) as u32;
             let mut stopped = false;
             let mut rays_per_sample = None;
-            'samples: for (done, sample) in samples.clone().enumerate() {
-                params.sample = sample;
+            let mut done = 0;
+            'samples: while done < samples.len() as u32 {
+                // Where one sample of the group takes less than a launch's target, a launch
+                // takes several: fewer launches, and the kernel's work-items start their
+                // next path as soon as one ends. The first takes one, to count its rays.
+                let whole = self.sample_bands.next_rows(w, group_rows) == group_rows;
+                let take = match done > 0 && whole {
+                    true => self
+                        .sample_bands
+                        .next_samples(w * group_rows, samples.len() as u32 - done),
+                    false => 1,
+                };
+                let first = samples.start + done;
+                params.sample = first;
+                params.sample_count = take;
                 let mut row = group0;
                 while row < group0 + group_rows {
                     let rows = self.sample_bands.next_rows(w, group0 + group_rows - row);
@@ -904,7 +934,7 @@ impl<'d> ClTracer<'d> {
                     let ms = launch_rect(device, &kernel, local, [x0, y0 + row], [w, rows])?;
                     times.kernel_ms += ms;
                     times.launches += 1;
-                    self.sample_bands.learn(rows * w, ms);
+                    self.sample_bands.learn(rows * w * take as usize, ms);
                     row += rows;
                     if stop.load(Ordering::Relaxed) {
                         stopped = true;
@@ -922,8 +952,9 @@ impl<'d> ClTracer<'d> {
                             *rays_per_sample.insert(n)
                         }
                     };
-                    on_sample(done as u32 + 1, per_sample * (done as u64 + 1));
+                    on_sample(done + take, per_sample * (done + take) as u64);
                 }
+                done += take;
             }
             let start = Instant::now();
             accum.read_rows(device, group_rows, &mut host)?;
@@ -1010,7 +1041,7 @@ impl<'d> ClTracer<'d> {
         let mut builder = kernel_builder(device, &self.program, kernel, &self.scene)?;
         light_params.bind(&mut builder);
         band.bind(&mut builder);
-        values.params(0, &accum, &rays).bind(&mut builder);
+        values.params(0..1, &accum, &rays).bind(&mut builder);
         let kernel = builder
             .build()
             .map_err(|e| device.error(&format!("creating the {name} kernel"), e))?;
@@ -1096,29 +1127,34 @@ impl<'d> ClTracer<'d> {
         // Launches are queued one ahead of the one waited for, so that the device never
         // idles while the host (perhaps slowed by a busy CPU device beside it) comes back
         // to queue the next: arguments set after a launch is queued do not change it.
+        // A launch takes as many samples as fit its target (`render_samples`).
         let mut in_flight = std::collections::VecDeque::new();
         let mut ms = 0.0;
-        for sample in samples {
+        let pixels = w * rows.len();
+        let mut next = samples.start;
+        while next < samples.end {
+            let take = self.sample_bands.next_samples(pixels, samples.end - next);
             band.set(kernel)
-                .and_then(|()| values.params(sample, accum, rays).set(kernel))
+                .and_then(|()| values.params(next..next + take, accum, rays).set(kernel))
                 .map_err(|e| device.error(&format!("setting the arguments of {name}"), e))?;
+            next += take;
             let origin = [x0, rows.start as usize];
-            in_flight.push_back(queue_rect(
-                device,
-                kernel,
-                self.local,
-                origin,
-                [w, rows.len()],
-            )?);
+            let event = queue_rect(device, kernel, self.local, origin, [w, rows.len()])?;
+            in_flight.push_back((event, pixels * take as usize));
             if in_flight.len() > 1 {
-                ms += wait_ms(device, &in_flight.pop_front().expect("two in flight"))?;
+                let (event, work) = in_flight.pop_front().expect("two in flight");
+                let launch_ms = wait_ms(device, &event)?;
+                self.sample_bands.learn(work, launch_ms);
+                ms += launch_ms;
                 if stop.load(std::sync::atomic::Ordering::Relaxed) {
                     break;
                 }
             }
         }
-        for event in in_flight {
-            ms += wait_ms(device, &event)?;
+        for (event, work) in in_flight {
+            let launch_ms = wait_ms(device, &event)?;
+            self.sample_bands.learn(work, launch_ms);
+            ms += launch_ms;
         }
         Ok(ms)
     }
@@ -1661,4 +1697,34 @@ fn event_ms(event: &ocl::Event) -> std::result::Result<f64, ocl::Error> {
     let start = event.profiling_info(ProfilingInfo::Start)?.time()?;
     let end = event.profiling_info(ProfilingInfo::End)?.time()?;
     Ok(end.saturating_sub(start) as f64 * 1e-6)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_launch_takes_as_many_samples_as_fit_its_target_and_at_least_one() {
+        let mut planner = BandPlanner {
+            rate: None,
+            first_band_pixels: 1000,
+        };
+        // Nothing measured: one sample.
+        assert_eq!(planner.next_samples(100, 64), 1);
+        // 10 pixel samples a millisecond: 1,000 in a launch's target, 10 samples of 100.
+        planner.learn(1000, 100.0);
+        assert_eq!(planner.next_samples(100, 64), 10);
+        assert_eq!(planner.next_samples(100, 4), 4);
+        // One sample of a larger region is over the target: still one.
+        assert_eq!(planner.next_samples(5000, 64), 1);
+        assert_eq!(planner.next_samples(100, 0), 1);
+    }
+
+    #[test]
+    fn only_programs_of_sample_kernels_alone_count_as_sampling() {
+        assert!(Kernels::NONE.with(Kernel::SamplePath).only_sampling());
+        assert!(!Kernels::ALL.only_sampling());
+        assert!(!Kernels::PRIMARY.only_sampling());
+        assert!(!Kernels::NONE.only_sampling());
+    }
 }
