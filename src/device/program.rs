@@ -355,6 +355,10 @@ impl ClDevice {
         }
         if features.bsdfs {
             defines.push("BSDFS".into());
+            defines.push(format!("BSDF_MODELS={}u", features.models));
+            if features.metallic {
+                defines.push("METALLIC".into());
+            }
         }
         if features.environment {
             defines.push("ENVIRONMENT".into());

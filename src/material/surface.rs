@@ -30,6 +30,11 @@ pub struct SurfaceFeatures {
     /// them it reaches emitters by light samples alone and keeps the diffuse path
     /// tracer's speed (the models cost the H200 23% a ray: docs/bench/2026-12-03-bsdfs.md).
     pub bsdfs: bool,
+    /// The scattering models the materials use, a bit per [`Bsdf`](crate::material::Bsdf)
+    /// code (`BSDF_MODELS`, cl/bsdf.cl): a program with `bsdfs` holds these alone.
+    pub models: u32,
+    /// Whether a material has metalness (`METALLIC`, cl/bsdf.cl).
+    pub metallic: bool,
     /// An environment light (`ENVIRONMENT`, cl/environment.cl), which also turns on the
     /// weighing of light and BSDF samples (`MIS`); not the surface's, but compiled in the
     /// same way. [`Surface::features`] leaves it off; the renderer sets it from the scene's
@@ -42,12 +47,16 @@ impl SurfaceFeatures {
     /// The features of a surface with `materials` and, or without, vertex normals (the
     /// environment and punctual lights left off).
     fn of(materials: &[Material], normals: bool) -> SurfaceFeatures {
+        let models = materials
+            .iter()
+            .fold(0, |bits, m| bits | 1u32.checked_shl(m.bsdf).unwrap_or(0));
+        let metallic = materials.iter().any(|m| m.metallic > 0.0);
         SurfaceFeatures {
             masks: materials.iter().any(Material::is_masked),
             normals,
-            bsdfs: materials
-                .iter()
-                .any(|m| m.bsdf != crate::material::Bsdf::Diffuse.code() || m.metallic > 0.0),
+            bsdfs: metallic || models & !(1 << crate::material::Bsdf::Diffuse.code()) != 0,
+            models,
+            metallic,
             environment: false,
             punctual: false,
         }
@@ -425,6 +434,29 @@ impl Surface {
 mod tests {
     use super::*;
     use crate::intersect::triangles_in_order;
+
+    #[test]
+    fn the_features_name_the_models_the_materials_use() {
+        use crate::material::Bsdf;
+        let bit = |b: Bsdf| 1u32 << b.code();
+        let lambert = SurfaceFeatures::of(&[Material::diffuse([0.5; 3])], false);
+        assert_eq!(
+            (lambert.bsdfs, lambert.models, lambert.metallic),
+            (false, bit(Bsdf::Diffuse), false)
+        );
+        let gold = Material::with_bsdf(Bsdf::Conductor, [1.0; 3], 0.5);
+        let room = SurfaceFeatures::of(&[Material::diffuse([0.5; 3]), gold], false);
+        assert!(room.bsdfs && !room.metallic);
+        assert_eq!(room.models, bit(Bsdf::Diffuse) | bit(Bsdf::Conductor));
+        // Metalness on a Lambertian base needs the models' code too.
+        let metal = Material {
+            metallic: 0.5,
+            ..Material::diffuse([0.5; 3])
+        };
+        let metallic = SurfaceFeatures::of(&[metal], false);
+        assert!(metallic.bsdfs && metallic.metallic);
+        assert_eq!(metallic.models, bit(Bsdf::Diffuse));
+    }
 
     /// One facet of a coarse unit sphere, its vertex normals the sphere's.
     fn facet() -> (Mesh, Surface, Triangle) {
