@@ -356,6 +356,8 @@ __kernel void sample_path(SAMPLE_PARAMS) {
             ++bounce;
             continue;
         }
+        /* The path has ended: its sample is summed and, if the launch has more, the next
+         * sample's camera ray is where the loop goes on. */
         sums += fixed3(radiance);
         rays_traced += count;
         if (++s == sample_count) break;
