@@ -39,8 +39,8 @@ const GROWTH: f64 = 2.0;
 const MIN_SHARE: f64 = 0.05;
 /// Bands of rows the region is cut into at least. A device's first unit, one sample of a
 /// band, measures its speed without holding up the frame much; after it, a unit covers
-/// every neighbouring band as far behind, in one launch a sample, so that a GPU's launches
-/// stay as large as when it renders alone (a launch over a band of a sixteenth of the
+/// every neighbouring band as far behind, in launches over all of them, so that a GPU's
+/// launches stay as large as when it renders alone (a launch over a band of a sixteenth of the
 /// frame, waited for one by one, cost an H200 14% beside a 16-core PoCL device).
 const MIN_BANDS: u64 = 16;
 
