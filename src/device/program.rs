@@ -353,7 +353,7 @@ impl ClDevice {
         if features.normals {
             defines.push("SHADING_NORMALS".into());
         }
-        if features.bsdfs {
+        if features.bsdfs() {
             defines.push("BSDFS".into());
             defines.push(format!("BSDF_MODELS={}u", features.models));
             if features.metallic {
@@ -366,7 +366,7 @@ impl ClDevice {
         if features.punctual {
             defines.push("PUNCTUAL".into());
         }
-        if features.bsdfs || features.environment {
+        if features.bsdfs() || features.environment {
             defines.push("MIS".into());
         }
         defines.extend(kernels.defines());

@@ -25,13 +25,9 @@ pub struct SurfaceFeatures {
     /// Vertex normals: primary rays shade with the interpolated normal (`SHADING_NORMALS`,
     /// cl/surface.cl).
     pub normals: bool,
-    /// Materials other than Lambertian: the path tracer holds the scattering models of
-    /// cl/bsdf.cl and weighs light and BSDF samples (`BSDFS`, cl/integrator.cl). Without
-    /// them it reaches emitters by light samples alone and keeps the diffuse path
-    /// tracer's speed (the models cost the H200 23% a ray: docs/bench/2026-12-03-bsdfs.md).
-    pub bsdfs: bool,
     /// The scattering models the materials use, a bit per [`Bsdf`](crate::material::Bsdf)
-    /// code (`BSDF_MODELS`, cl/bsdf.cl): a program with `bsdfs` holds these alone.
+    /// code (`BSDF_MODELS`, cl/bsdf.cl): a program with [`SurfaceFeatures::bsdfs`] holds
+    /// these alone.
     pub models: u32,
     /// Whether a material has metalness (`METALLIC`, cl/bsdf.cl).
     pub metallic: bool,
@@ -54,12 +50,19 @@ impl SurfaceFeatures {
         SurfaceFeatures {
             masks: materials.iter().any(Material::is_masked),
             normals,
-            bsdfs: metallic || models & !(1 << crate::material::Bsdf::Diffuse.code()) != 0,
             models,
             metallic,
             environment: false,
             punctual: false,
         }
+    }
+
+    /// Materials other than Lambertian: the path tracer holds the scattering models of
+    /// cl/bsdf.cl and weighs light and BSDF samples (`BSDFS`, cl/integrator.cl). Without
+    /// them it reaches emitters by light samples alone and keeps the diffuse path
+    /// tracer's speed (the models cost the H200 23% a ray: docs/bench/2026-12-03-bsdfs.md).
+    pub fn bsdfs(&self) -> bool {
+        self.metallic || self.models & !(1 << crate::material::Bsdf::Diffuse.code()) != 0
     }
 
     /// The features of the [`Surface`] made of `mesh` and `materials` once smooth normals
@@ -441,12 +444,12 @@ mod tests {
         let bit = |b: Bsdf| 1u32 << b.code();
         let lambert = SurfaceFeatures::of(&[Material::diffuse([0.5; 3])], false);
         assert_eq!(
-            (lambert.bsdfs, lambert.models, lambert.metallic),
+            (lambert.bsdfs(), lambert.models, lambert.metallic),
             (false, bit(Bsdf::Diffuse), false)
         );
         let gold = Material::with_bsdf(Bsdf::Conductor, [1.0; 3], 0.5);
         let room = SurfaceFeatures::of(&[Material::diffuse([0.5; 3]), gold], false);
-        assert!(room.bsdfs && !room.metallic);
+        assert!(room.bsdfs() && !room.metallic);
         assert_eq!(room.models, bit(Bsdf::Diffuse) | bit(Bsdf::Conductor));
         // Metalness on a Lambertian base needs the models' code too.
         let metal = Material {
@@ -454,7 +457,7 @@ mod tests {
             ..Material::diffuse([0.5; 3])
         };
         let metallic = SurfaceFeatures::of(&[metal], false);
-        assert!(metallic.bsdfs && metallic.metallic);
+        assert!(metallic.bsdfs() && metallic.metallic);
         assert_eq!(metallic.models, bit(Bsdf::Diffuse));
     }
 

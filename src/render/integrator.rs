@@ -261,7 +261,7 @@ fn camera_cone(camera: &Pinhole, t: f32) -> f32 {
 /// wide lobes light samples alone find poorly). Else emitters are found by light samples
 /// alone after the camera ray.
 pub(crate) fn weighs_samples(surface: &Surface, lights: &Lights) -> bool {
-    surface.features().bsdfs || lights.environment.is_some()
+    surface.features().bsdfs() || lights.environment.is_some()
 }
 
 /// `scatter_from` in cl/integrator.cl: what the shading point scatters towards the eye of
