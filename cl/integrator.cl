@@ -34,6 +34,8 @@ FORCE_INLINE float3 sky(float3 d) {
 #define LIGHT_PARAMS __global const uint* emitters, \
     __global const float* emitter_cdf, uint emitter_count, float emitter_power, \
     ENV_PARAMS, PUNCTUAL_PARAMS
+/* Passes LIGHT_PARAMS on. */
+#define LIGHTS emitters, emitter_cdf, emitter_count, emitter_power, ENV, punctual, punctual_count
 
 /* Every sample kernel takes the same arguments; each mode reads the ones it needs. The
  * launch covers columns [col0, col_end) and rows [global offset, row_end); the
@@ -176,200 +178,214 @@ FORCE_INLINE float3 scatter_from(const Shading* sh, bool lambert, float3 n, floa
 }
 
 #ifdef KERNEL_SAMPLE_PATH
+/* A path between its vertices: the ray it goes on along (from org along dir), what it has
+ * gathered, what its vertices so far pass on, and its sample's stream. */
+typedef struct {
+    float3 org, dir, radiance, throughput;
+    /* The ray cone's width at the last hit (0 at the eye), for texture filtering. */
+    float cone;
+    /* The density of the last bounce's direction, to weigh an emitter it hits against
+     * light sampling (the power heuristic); 0 where light sampling could not have found
+     * it: camera rays, delta lobes, light through the surface. */
+    float last_pdf;
+    uint bounce, count, key;
+} PathState;
+
+/* A path's start: the camera ray of the sample whose stream is key. */
+FORCE_INLINE void path_begin(CAMERA_PARAMS, uint x, uint y, uint key, PathState* p) {
+    p->key = key;
+    p->dir = jittered_ray(CAMERA, x, y, key, &p->org);
+    p->radiance = (float3)(0.0f);
+    p->throughput = (float3)(1.0f);
+    p->count = 1;
+    p->cone = 0.0f;
+    p->last_pdf = 0.0f;
+    p->bounce = 0;
+}
+
+/* The path's vertex at its ray's hit (triangle hit at ray parameter t, or MISS): emission
+ * found, light sampled, and the next direction drawn. Returns whether the path goes on
+ * (p's ray is then the next one); every false ends it. */
+FORCE_INLINE bool path_vertex(SCENE_PARAMS, LIGHT_PARAMS, float4 du, float offset,
+                              uint max_bounces, uint hit, float t, PathState* p) {
+    uint key = p->key;
+    float3 dir = p->dir;
+    if (hit == MISS) {
+#if defined(ENVIRONMENT)
+        float env_pdf;
+        float3 le = env_radiance(ENV, normalize(dir), &env_pdf);
+        /* Weighed against the environment's light samples, which could have found it. */
+        if (p->last_pdf > 0.0f) {
+            float r = env_pdf / p->last_pdf;
+            le *= 1.0f / (1.0f + r * r);
+        }
+        p->radiance += p->throughput * le;
+#elif !defined(PUNCTUAL)
+        if (emitter_count == 0) p->radiance += p->throughput * sky(dir);
+#endif
+        return false;
+    }
+    const __global Triangle* tri = &tris[hit];
+    p->cone = p->bounce == 0 ? camera_cone(du, t) : p->cone + BOUNCE_CONE_SPREAD * t;
+    SurfacePoint sp = surface_point(SURFACE, tri, p->org, dir, t, offset, p->cone);
+#ifdef MIS
+    if (p->last_pdf > 0.0f && max3(sp.emission) > 0.0f) {
+        /* dir is a unit vector after the camera ray, so t is the distance. */
+        float r = t * t * emitter_density(materials, tri, emitter_power)
+                / fabs(dot3(sp.ng, dir)) / p->last_pdf;
+        p->radiance += p->throughput * sp.emission * (1.0f / (1.0f + r * r));
+    } else if (p->last_pdf == 0.0f) {
+        p->radiance += p->throughput * sp.emission;
+    }
+    /* The last bounce's direction was traced only for the emitter it might hit. */
+    if (p->bounce > max_bounces) return false;
+#else
+    /* Lambertian scenes: after the camera ray, emitters are reached by light samples
+     * alone (no MIS), which for diffuse bounces off small lights loses nothing and
+     * saves the weights and the last bounce's ray. */
+    if (p->bounce == 0) p->radiance += p->throughput * sp.emission;
+#endif
+    Shading sh = shading_at(&materials[tri->material], &sp);
+    /* Lambert alone takes the short way, without a local frame. Programs of scenes whose
+     * every material is Lambertian leave the other models out (BSDFS undefined): they
+     * cost registers, and so speed, even where no ray reaches them. */
+#ifdef BSDFS
+    bool lambert = sh.bsdf == BSDF_DIFFUSE && sh.metallic <= 0.0f;
+#else
+    const bool lambert = true;
+#endif
+    float3 origin = sp.origin;
+    float3 n = sp.ns;
+    float3 tn = (float3)(0.0f), bn = (float3)(0.0f), wo_l = (float3)(0.0f);
+    if (!lambert) {
+        basis(n, &tn, &bn);
+        float3 wo = -normalize(dir);
+        wo_l = (float3)(dot(wo, tn), dot(wo, bn), dot(wo, n));
+    }
+    uint d = bounce_dim(p->bounce);
+    bool lit = lambert || !shading_all_delta(&sh);
+    if (emitter_count > 0 && lit) {
+        const __global Triangle* e = &tris[emitters[cdf_find(emitter_cdf, emitter_count, sample_1d(key, d))]];
+        float u1 = sample_1d(key, d + 1), u2 = sample_1d(key, d + 2);
+        float3 q = triangle_point(load3(e->v0), load3(e->v1), load3(e->v2), u1, u2);
+        float3 w = q - origin;
+        float d2 = dot(w, w);
+        float3 l = w / sqrt(d2);
+        float cos_there = dot(emitting_normal(e, l), -l);
+        if (cos_there > 0.0f && dot3(l, sp.ng) > 0.0f) {
+            float bsdf_pdf;
+            float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
+            if (max3(f) > 0.0f) {
+                p->count += 1;
+                if (!occluded(SCENE, origin, l, sqrt(d2) * (1.0f - 1e-4f))) {
+                    float su = sqrt(u1);
+                    float light_pdf = d2 * emitter_density(materials, e, emitter_power) / cos_there;
+#ifdef MIS
+                    float r = bsdf_pdf / light_pdf;
+                    float weight = 1.0f / (1.0f + r * r);
+#else
+                    float weight = 1.0f;
+#endif
+                    p->radiance += p->throughput * f * emitted(SURFACE, e, 1.0f - su, u2 * su) * (weight / light_pdf);
+                }
+            }
+        }
+    }
+#ifdef ENVIRONMENT
+    if (lit) {
+        float3 l;
+        float env_pdf;
+        float3 le = env_sample(ENV, sample_1d(key, d + 8), sample_1d(key, d + 9), &l, &env_pdf);
+        if (env_pdf > 0.0f && dot3(l, sp.ng) > 0.0f) {
+            float bsdf_pdf;
+            float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
+            if (max3(f) > 0.0f) {
+                p->count += 1;
+                if (!occluded(SCENE, origin, l, INFINITY)) {
+                    float r = bsdf_pdf / env_pdf;
+                    p->radiance += p->throughput * f * le * (1.0f / (1.0f + r * r) / env_pdf);
+                }
+            }
+        }
+    }
+#endif
+#ifdef PUNCTUAL
+    /* Every punctual light, each by one shadow ray: nothing else can find them. */
+    for (uint k = 0; lit && k < punctual_count; ++k) {
+        float3 l;
+        float reach;
+        float3 e = punctual_incident(punctual, k, origin, &l, &reach);
+        if (max3(e) > 0.0f && dot3(l, sp.ng) > 0.0f) {
+            float bsdf_pdf;
+            float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
+            if (max3(f) > 0.0f) {
+                p->count += 1;
+                if (!occluded(SCENE, origin, l, reach * (1.0f - 1e-4f))) p->radiance += p->throughput * f * e;
+            }
+        }
+    }
+#endif
+#ifndef MIS
+    if (p->bounce == max_bounces) return false;
+#endif
+    float u1 = sample_1d(key, d + 4), u2 = sample_1d(key, d + 5);
+    BsdfSample bs;
+    if (lambert) {
+        bs.wi = cosine_direction(n, u1, u2);
+        bs.weight = sh.albedo;
+        bs.pdf = fmax(dot(bs.wi, n), 0.0f) / M_PI_F;
+        bs.delta = false;
+        bs.transmitted = false;
+    } else {
+        if (!bsdf_sample(&sh, wo_l, sample_1d(key, d + 6), u1, u2, sample_1d(key, d + 7), &bs)) return false;
+        bs.wi = tn * bs.wi.x + bn * bs.wi.y + n * bs.wi.z;
+    }
+    p->throughput *= bs.weight;
+    if (p->bounce >= ROULETTE_AFTER) {
+        float keep = fmin(max3(p->throughput), 0.95f);
+        if (sample_1d(key, d + 3) >= keep) return false;
+        p->throughput /= keep;
+    }
+    /* A reflected direction below the geometric surface would leave through it, a
+     * refracted one above it would not. */
+    float side = dot3(bs.wi, sp.ng);
+    if (bs.transmitted ? side >= 0.0f : side <= 0.0f) return false;
+    p->org = bs.transmitted ? sp.through : origin;
+    p->dir = bs.wi;
+    p->last_pdf = bs.delta || bs.transmitted ? 0.0f : bs.pdf;
+    p->count += 1;
+    p->bounce += 1;
+    return true;
+}
+
 /* The launch's samples of a pixel are traced one path after another in one loop, each turn
  * of which traces one ray of the current path: a work-item whose path ends starts its next
  * sample in the next turn (path regeneration), so that the work-items of a SIMD group keep
  * tracing together instead of waiting, sample by sample, for their longest path. */
 __kernel void sample_path(SAMPLE_PARAMS) {
     SAMPLE_PIXEL
-    long3 sums = (long3)(0);
+    /* Each sample's sums go to the pixel's as it ends, not kept in registers across every
+     * traversal: on the H200 that made path tracing 1-12% faster
+     * (docs/bench/2026-12-04-wavefront.md). */
+    __global long4* pixel_sums = &accum[(y - row0) * accum_pitch + (x - col0)];
     uint rays_traced = 0;
     uint s = 0;
-    uint key = sampler_key(seed, y * width + x, sample);
-    float3 org;
-    float3 dir = jittered_ray(CAMERA, x, y, key, &org);
-    float3 radiance = (float3)(0.0f), throughput = (float3)(1.0f);
-    uint count = 1;
-    /* The ray cone's width at the last hit (0 at the eye), for texture filtering. */
-    float cone = 0.0f;
-    /* The density of the last bounce's direction, to weigh an emitter it hits against
-     * light sampling (the power heuristic); 0 where light sampling could not have found
-     * it: camera rays, delta lobes, light through the surface. */
-    float last_pdf = 0.0f;
-    uint bounce = 0;
+    PathState p;
+    path_begin(CAMERA, x, y, sampler_key(seed, y * width + x, sample), &p);
     for (;;) {
         /* One call site for the camera ray and every bounce: each inlined traversal costs
          * compile time, and on the H200 the one site also ran 1.4-4.4% faster
          * (docs/bench/2026-12-04-first-image.md). */
         float t;
-        uint hit = trace(SCENE, org, dir, INFINITY, false, true, &t);
-        /* The path goes on past this vertex; every break below ends it. */
-        bool goes_on = false;
-        do {
-            if (hit == MISS) {
-#if defined(ENVIRONMENT)
-                float env_pdf;
-                float3 le = env_radiance(ENV, normalize(dir), &env_pdf);
-                /* Weighed against the environment's light samples, which could have found it. */
-                if (last_pdf > 0.0f) {
-                    float r = env_pdf / last_pdf;
-                    le *= 1.0f / (1.0f + r * r);
-                }
-                radiance += throughput * le;
-#elif !defined(PUNCTUAL)
-                if (emitter_count == 0) radiance += throughput * sky(dir);
-#endif
-                break;
-            }
-            const __global Triangle* tri = &tris[hit];
-            cone = bounce == 0 ? camera_cone(du, t) : cone + BOUNCE_CONE_SPREAD * t;
-            SurfacePoint sp = surface_point(SURFACE, tri, org, dir, t, offset, cone);
-#ifdef MIS
-            if (last_pdf > 0.0f && max3(sp.emission) > 0.0f) {
-                /* dir is a unit vector after the camera ray, so t is the distance. */
-                float r = t * t * emitter_density(materials, tri, emitter_power)
-                        / fabs(dot3(sp.ng, dir)) / last_pdf;
-                radiance += throughput * sp.emission * (1.0f / (1.0f + r * r));
-            } else if (last_pdf == 0.0f) {
-                radiance += throughput * sp.emission;
-            }
-            /* The last bounce's direction was traced only for the emitter it might hit. */
-            if (bounce > max_bounces) break;
-#else
-            /* Lambertian scenes: after the camera ray, emitters are reached by light samples
-             * alone (no MIS), which for diffuse bounces off small lights loses nothing and
-             * saves the weights and the last bounce's ray. */
-            if (bounce == 0) radiance += throughput * sp.emission;
-#endif
-            Shading sh = shading_at(&materials[tri->material], &sp);
-            /* Lambert alone takes the short way, without a local frame. Programs of scenes whose
-             * every material is Lambertian leave the other models out (BSDFS undefined): they
-             * cost registers, and so speed, even where no ray reaches them. */
-#ifdef BSDFS
-            bool lambert = sh.bsdf == BSDF_DIFFUSE && sh.metallic <= 0.0f;
-#else
-            const bool lambert = true;
-#endif
-            float3 origin = sp.origin;
-            float3 n = sp.ns;
-            float3 tn = (float3)(0.0f), bn = (float3)(0.0f), wo_l = (float3)(0.0f);
-            if (!lambert) {
-                basis(n, &tn, &bn);
-                float3 wo = -normalize(dir);
-                wo_l = (float3)(dot(wo, tn), dot(wo, bn), dot(wo, n));
-            }
-            uint d = bounce_dim(bounce);
-            bool lit = lambert || !shading_all_delta(&sh);
-            if (emitter_count > 0 && lit) {
-                const __global Triangle* e = &tris[emitters[cdf_find(emitter_cdf, emitter_count, sample_1d(key, d))]];
-                float u1 = sample_1d(key, d + 1), u2 = sample_1d(key, d + 2);
-                float3 q = triangle_point(load3(e->v0), load3(e->v1), load3(e->v2), u1, u2);
-                float3 w = q - origin;
-                float d2 = dot(w, w);
-                float3 l = w / sqrt(d2);
-                float cos_there = dot(emitting_normal(e, l), -l);
-                if (cos_there > 0.0f && dot3(l, sp.ng) > 0.0f) {
-                    float bsdf_pdf;
-                    float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
-                    if (max3(f) > 0.0f) {
-                        count += 1;
-                        if (!occluded(SCENE, origin, l, sqrt(d2) * (1.0f - 1e-4f))) {
-                            float su = sqrt(u1);
-                            float light_pdf = d2 * emitter_density(materials, e, emitter_power) / cos_there;
-#ifdef MIS
-                            float r = bsdf_pdf / light_pdf;
-                            float weight = 1.0f / (1.0f + r * r);
-#else
-                            float weight = 1.0f;
-#endif
-                            radiance += throughput * f * emitted(SURFACE, e, 1.0f - su, u2 * su) * (weight / light_pdf);
-                        }
-                    }
-                }
-            }
-#ifdef ENVIRONMENT
-            if (lit) {
-                float3 l;
-                float env_pdf;
-                float3 le = env_sample(ENV, sample_1d(key, d + 8), sample_1d(key, d + 9), &l, &env_pdf);
-                if (env_pdf > 0.0f && dot3(l, sp.ng) > 0.0f) {
-                    float bsdf_pdf;
-                    float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
-                    if (max3(f) > 0.0f) {
-                        count += 1;
-                        if (!occluded(SCENE, origin, l, INFINITY)) {
-                            float r = bsdf_pdf / env_pdf;
-                            radiance += throughput * f * le * (1.0f / (1.0f + r * r) / env_pdf);
-                        }
-                    }
-                }
-            }
-#endif
-#ifdef PUNCTUAL
-            /* Every punctual light, each by one shadow ray: nothing else can find them. */
-            for (uint k = 0; lit && k < punctual_count; ++k) {
-                float3 l;
-                float reach;
-                float3 e = punctual_incident(punctual, k, origin, &l, &reach);
-                if (max3(e) > 0.0f && dot3(l, sp.ng) > 0.0f) {
-                    float bsdf_pdf;
-                    float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
-                    if (max3(f) > 0.0f) {
-                        count += 1;
-                        if (!occluded(SCENE, origin, l, reach * (1.0f - 1e-4f))) radiance += throughput * f * e;
-                    }
-                }
-            }
-#endif
-#ifndef MIS
-            if (bounce == max_bounces) break;
-#endif
-            float u1 = sample_1d(key, d + 4), u2 = sample_1d(key, d + 5);
-            BsdfSample bs;
-            if (lambert) {
-                bs.wi = cosine_direction(n, u1, u2);
-                bs.weight = sh.albedo;
-                bs.pdf = fmax(dot(bs.wi, n), 0.0f) / M_PI_F;
-                bs.delta = false;
-                bs.transmitted = false;
-            } else {
-                if (!bsdf_sample(&sh, wo_l, sample_1d(key, d + 6), u1, u2, sample_1d(key, d + 7), &bs)) break;
-                bs.wi = tn * bs.wi.x + bn * bs.wi.y + n * bs.wi.z;
-            }
-            throughput *= bs.weight;
-            if (bounce >= ROULETTE_AFTER) {
-                float keep = fmin(max3(throughput), 0.95f);
-                if (sample_1d(key, d + 3) >= keep) break;
-                throughput /= keep;
-            }
-            /* A reflected direction below the geometric surface would leave through it, a
-             * refracted one above it would not. */
-            float side = dot3(bs.wi, sp.ng);
-            if (bs.transmitted ? side >= 0.0f : side <= 0.0f) break;
-            org = bs.transmitted ? sp.through : origin;
-            dir = bs.wi;
-            last_pdf = bs.delta || bs.transmitted ? 0.0f : bs.pdf;
-            count += 1;
-            goes_on = true;
-        } while (false);
-        if (goes_on) {
-            ++bounce;
-            continue;
-        }
+        uint hit = trace(SCENE, p.org, p.dir, INFINITY, false, true, &t);
+        if (path_vertex(SCENE, LIGHTS, du, offset, max_bounces, hit, t, &p)) continue;
         /* The path has ended: its sample is summed and, if the launch has more, the next
          * sample's camera ray is where the loop goes on. */
-        sums += fixed3(radiance);
-        rays_traced += count;
+        *pixel_sums += (long4)(fixed3(p.radiance), 0);
+        rays_traced += p.count;
         if (++s == sample_count) break;
-        key = sampler_key(seed, y * width + x, sample + s);
-        dir = jittered_ray(CAMERA, x, y, key, &org);
-        radiance = (float3)(0.0f);
-        throughput = (float3)(1.0f);
-        count = 1;
-        cone = 0.0f;
-        last_pdf = 0.0f;
-        bounce = 0;
+        path_begin(CAMERA, x, y, sampler_key(seed, y * width + x, sample + s), &p);
     }
-    add_samples(accum, rays, accum_pitch, x - col0, y - row0, sums, sample_count, rays_traced);
+    add_samples(accum, rays, accum_pitch, x - col0, y - row0, (long3)(0), sample_count, rays_traced);
 }
 #endif
