@@ -220,8 +220,10 @@ FORCE_INLINE bool path_vertex(SCENE_PARAMS, LIGHT_PARAMS, float4 du, float offse
             le *= 1.0f / (1.0f + r * r);
         }
         p->radiance += p->throughput * le;
-#elif !defined(PUNCTUAL)
+#elif !defined(PUNCTUAL) && defined(EMITTERS)
         if (emitter_count == 0) p->radiance += p->throughput * sky(dir);
+#elif !defined(PUNCTUAL)
+        p->radiance += p->throughput * sky(dir);
 #endif
         return false;
     }
@@ -264,6 +266,9 @@ FORCE_INLINE bool path_vertex(SCENE_PARAMS, LIGHT_PARAMS, float4 du, float offse
     }
     uint d = bounce_dim(p->bounce);
     bool lit = lambert || !shading_all_delta(&sh);
+    /* Programs of scenes without emitting materials (EMITTERS undefined) leave the
+     * emitters' light samples out. */
+#ifdef EMITTERS
     if (emitter_count > 0 && lit) {
         const __global Triangle* e = &tris[emitters[cdf_find(emitter_cdf, emitter_count, sample_1d(key, d))]];
         float u1 = sample_1d(key, d + 1), u2 = sample_1d(key, d + 2);
@@ -291,6 +296,7 @@ FORCE_INLINE bool path_vertex(SCENE_PARAMS, LIGHT_PARAMS, float4 du, float offse
             }
         }
     }
+#endif
 #ifdef ENVIRONMENT
     if (lit) {
         float3 l;

@@ -360,6 +360,9 @@ impl ClDevice {
                 defines.push("METALLIC".into());
             }
         }
+        if features.emitters {
+            defines.push("EMITTERS".into());
+        }
         if features.environment {
             defines.push("ENVIRONMENT".into());
         }

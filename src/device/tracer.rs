@@ -769,6 +769,7 @@ impl<'d> ClTracer<'d> {
         let has = self.program.features();
         if (lights.environment.is_some() && !has.environment)
             || (!lights.punctual.is_empty() && !has.punctual)
+            || (!emitters.is_empty() && !has.emitters)
         {
             return Err(Error::Invalid(format!(
                 "the program was compiled for {has:?}, not for this scene's lights"

@@ -31,6 +31,10 @@ pub struct SurfaceFeatures {
     pub models: u32,
     /// Whether a material has metalness (`METALLIC`, cl/bsdf.cl).
     pub metallic: bool,
+    /// Whether a material emits (`EMITTERS`, cl/integrator.cl): without, the path tracer
+    /// holds no light sampling of emitters, whose code (a second traversal among it) costs
+    /// compile time and registers in scenes lit by the sky alone.
+    pub emitters: bool,
     /// An environment light (`ENVIRONMENT`, cl/environment.cl), which also turns on the
     /// weighing of light and BSDF samples (`MIS`); not the surface's, but compiled in the
     /// same way. [`Surface::features`] leaves it off; the renderer sets it from the scene's
@@ -52,6 +56,7 @@ impl SurfaceFeatures {
             normals,
             models,
             metallic,
+            emitters: materials.iter().any(Material::emits),
             environment: false,
             punctual: false,
         }
@@ -459,6 +464,13 @@ mod tests {
         let metallic = SurfaceFeatures::of(&[metal], false);
         assert!(metallic.bsdfs() && metallic.metallic);
         assert_eq!(metallic.models, bit(Bsdf::Diffuse));
+        // Emitters: any material with emission, whatever its model.
+        assert!(!lambert.emitters && !room.emitters);
+        let lamp = Material {
+            emission: [0.0, 0.0, 4.0],
+            ..Material::diffuse([0.5; 3])
+        };
+        assert!(SurfaceFeatures::of(&[Material::diffuse([0.5; 3]), lamp], false).emitters);
     }
 
     /// One facet of a coarse unit sphere, its vertex normals the sphere's.
