@@ -831,7 +831,11 @@ impl<'d> ClTracer<'d> {
     pub(crate) fn set_surface(&mut self, surface: &Surface) -> Result<()> {
         let device = self.device;
         let (needs, has) = (surface.features(), self.program.features());
-        if (needs.masks && !has.masks) || (needs.normals && !has.normals) {
+        let shades_paths = self.program.kernels().contains(Kernel::SamplePath);
+        if (needs.masks && !has.masks)
+            || (needs.normals && !has.normals)
+            || (shades_paths && !has.holds_models_of(&needs))
+        {
             return Err(Error::Invalid(format!(
                 "the program was compiled for a surface with {has:?}, this one has {needs:?}"
             )));

@@ -70,6 +70,17 @@ impl SurfaceFeatures {
         self.metallic || self.models & !(1 << crate::material::Bsdf::Diffuse.code()) != 0
     }
 
+    /// Whether a path-tracing program compiled for these features holds every scattering
+    /// model a surface with `needs` uses: none where all of its materials are Lambertian,
+    /// else the models (and metalness) among the program's. A program without a model
+    /// would shade its materials as something else, silently.
+    pub fn holds_models_of(&self, needs: &SurfaceFeatures) -> bool {
+        !needs.bsdfs()
+            || (self.bsdfs()
+                && needs.models & !self.models == 0
+                && (!needs.metallic || self.metallic))
+    }
+
     /// The features of the [`Surface`] made of `mesh` and `materials` once smooth normals
     /// are filled in with `crease_degrees` ([`Mesh::fill_normals`]), known before they are
     /// computed: the kernels can compile meanwhile.
@@ -471,6 +482,40 @@ mod tests {
             ..Material::diffuse([0.5; 3])
         };
         assert!(SurfaceFeatures::of(&[Material::diffuse([0.5; 3]), lamp], false).emitters);
+    }
+
+    #[test]
+    fn a_program_holds_the_models_of_a_surface_only_with_each_of_them() {
+        use crate::material::Bsdf;
+        let of = |m: &[Material]| SurfaceFeatures::of(m, false);
+        let lambert = of(&[Material::diffuse([0.5; 3])]);
+        let gold = of(&[Material::with_bsdf(Bsdf::Conductor, [1.0; 3], 0.5)]);
+        let glass = of(&[Material::with_bsdf(Bsdf::Dielectric, [1.0; 3], 0.0)]);
+        let both = of(&[
+            Material::with_bsdf(Bsdf::Conductor, [1.0; 3], 0.5),
+            Material::with_bsdf(Bsdf::Dielectric, [1.0; 3], 0.0),
+        ]);
+        let metal = of(&[Material {
+            metallic: 1.0,
+            ..Material::diffuse([0.5; 3])
+        }]);
+        // Lambertian surfaces need nothing; the defaults' program holds no model.
+        for program in [
+            SurfaceFeatures::default(),
+            lambert,
+            gold,
+            glass,
+            both,
+            metal,
+        ] {
+            assert!(program.holds_models_of(&lambert));
+        }
+        assert!(!SurfaceFeatures::default().holds_models_of(&gold));
+        assert!(!lambert.holds_models_of(&gold));
+        assert!(gold.holds_models_of(&gold) && both.holds_models_of(&gold));
+        assert!(!glass.holds_models_of(&gold) && !gold.holds_models_of(&both));
+        assert!(!lambert.holds_models_of(&metal) && !gold.holds_models_of(&metal));
+        assert!(metal.holds_models_of(&metal));
     }
 
     /// One facet of a coarse unit sphere, its vertex normals the sphere's.
