@@ -137,7 +137,9 @@ pub(crate) fn tile_order(width: u32, height: u32, tile: u32) -> impl Iterator<It
 /// under "Diffuse rays"). With `passes` above 1, the batch is that many passes over the
 /// image, pass `k` drawing sample `k` of each pixel's random numbers (pass 0 is the plain
 /// diffuse batch), as a renderer traces one sample of every pixel after another.
-pub(crate) fn diffuse_rays(mesh: &Mesh, camera: &Camera, passes: u32) -> Vec<Ray> {
+/// Public so that a harness outside cltrace can time another tracer on the very rays
+/// `cltrace bench` traces (`--rays diffuse` is one pass, `diffuse-16` sixteen).
+pub fn diffuse_rays(mesh: &Mesh, camera: &Camera, passes: u32) -> Vec<Ray> {
     use crate::intersect::ClosestHit;
     use crate::render::sampling::{Sampler, cosine_direction};
     use glam::Vec3;
