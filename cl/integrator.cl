@@ -150,10 +150,12 @@ __kernel void sample_shadow(SAMPLE_PARAMS) {
 FORCE_INLINE float3 emitted(SURFACE_PARAMS, const __global Triangle* e, float w0, float w1) {
     const __global Material* m = &materials[e->material];
     float3 le = load3(m->emission);
+#ifdef TEXTURES
     if (m->emission_texture != NO_TEXTURE && (surface_flags & SURFACE_UVS) != 0u) {
         float2 uv = surface_uv(SURFACE, e->prim, (float3)(w0, w1, 1.0f - w0 - w1));
         le = le * sample_texture(textures, texels, m->emission_texture, uv, 0.0f).xyz;
     }
+#endif
     return le;
 }
 

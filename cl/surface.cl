@@ -135,17 +135,18 @@ FORCE_INLINE SurfacePoint surface_point(SURFACE_PARAMS, const __global Triangle*
             if (smooth) n = mixed / len;
         }
     }
-    float2 uv = (float2)(0.0f);
-    float lod_base = 0.0f;
+    /* Programs of scenes whose materials read no texture (TEXTURES undefined) leave the
+     * lookups out: they are much of the progressive kernels' code and compile time. */
+#ifdef TEXTURES
     if ((surface_flags & SURFACE_UVS) != 0u) {
         float2 t0 = vload2(i0, uvs), t1 = vload2(i1, uvs), t2 = vload2(i2, uvs);
-        uv = LERP3(t0, t1, t2, w);
+        float2 uv = LERP3(t0, t1, t2, w);
         float2 d1 = t1 - t0, d2 = t2 - t0;
         float uv_det = d1.x * d2.y - d1.y * d2.x;
         /* Ray cones (Akenine-Moller et al. 2019): the footprint's width over the
          * texture-space scale of this triangle, widened by the grazing angle. */
         float cos_view = fabs(dot3(front, dir)) / length3(dir);
-        lod_base = log2(cone_width / fmax(cos_view, 1e-4f))
+        float lod_base = log2(cone_width / fmax(cos_view, 1e-4f))
                  + 0.5f * log2(fabs(uv_det) / area2);
         if (m->normal_texture != NO_TEXTURE && uv_det != 0.0f) {
             float3 tangent = (e1 * d2.y - e2 * d1.y) / uv_det;
@@ -176,6 +177,7 @@ FORCE_INLINE SurfacePoint surface_point(SURFACE_PARAMS, const __global Triangle*
             s.metallic *= mr.z;
         }
     }
+#endif
     if ((surface_flags & SURFACE_COLORS) != 0u) {
         s.albedo = s.albedo * LERP3(vload3(i0, vertex_colors), vload3(i1, vertex_colors), vload3(i2, vertex_colors), w);
     }

@@ -353,6 +353,9 @@ impl ClDevice {
         if features.normals {
             defines.push("SHADING_NORMALS".into());
         }
+        if features.textures {
+            defines.push("TEXTURES".into());
+        }
         if features.bsdfs() {
             defines.push("BSDFS".into());
             defines.push(format!("BSDF_MODELS={}u", features.models));

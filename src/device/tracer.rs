@@ -834,6 +834,7 @@ impl<'d> ClTracer<'d> {
         let shades_paths = self.program.kernels().contains(Kernel::SamplePath);
         if (needs.masks && !has.masks)
             || (needs.normals && !has.normals)
+            || (needs.textures && !has.textures)
             || (shades_paths && !has.holds_models_of(&needs))
         {
             return Err(Error::Invalid(format!(

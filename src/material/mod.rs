@@ -193,6 +193,20 @@ impl Material {
         self.alpha_texture != NO_TEXTURE
     }
 
+    /// Whether the material reads a texture while shading (base colour, emission,
+    /// metalness and roughness, or a normal map; the occlusion map is not read by the
+    /// kernels, the cut-out mask is [`Material::is_masked`]).
+    pub fn shades_with_textures(&self) -> bool {
+        [
+            self.base_texture,
+            self.emission_texture,
+            self.metallic_roughness_texture,
+            self.normal_texture,
+        ]
+        .iter()
+        .any(|&t| t != NO_TEXTURE)
+    }
+
     /// Every texture slot, for renumbering.
     fn texture_slots(&mut self) -> [&mut i32; 6] {
         [

@@ -25,6 +25,10 @@ pub struct SurfaceFeatures {
     /// Vertex normals: primary rays shade with the interpolated normal (`SHADING_NORMALS`,
     /// cl/surface.cl).
     pub normals: bool,
+    /// Textures read while shading (`TEXTURES`, cl/surface.cl): without, the progressive
+    /// modes hold no texture lookups, which are much of their code and so of their
+    /// compile time (docs/bench/2026-12-04-first-image.md).
+    pub textures: bool,
     /// The scattering models the materials use, a bit per [`Bsdf`](crate::material::Bsdf)
     /// code (`BSDF_MODELS`, cl/bsdf.cl): a program with [`SurfaceFeatures::bsdfs`] holds
     /// these alone.
@@ -54,6 +58,7 @@ impl SurfaceFeatures {
         SurfaceFeatures {
             masks: materials.iter().any(Material::is_masked),
             normals,
+            textures: materials.iter().any(Material::shades_with_textures),
             models,
             metallic,
             emitters: materials.iter().any(Material::emits),
@@ -482,6 +487,20 @@ mod tests {
             ..Material::diffuse([0.5; 3])
         };
         assert!(SurfaceFeatures::of(&[Material::diffuse([0.5; 3]), lamp], false).emitters);
+        // Textures: a shading texture in any slot; a cut-out mask alone is `masks`.
+        assert!(!lambert.textures && !room.textures);
+        for slot in 0..5 {
+            let mut m = Material::diffuse([0.5; 3]);
+            *[
+                &mut m.base_texture,
+                &mut m.emission_texture,
+                &mut m.metallic_roughness_texture,
+                &mut m.normal_texture,
+                &mut m.alpha_texture,
+            ][slot] = 0;
+            let f = SurfaceFeatures::of(&[m], false);
+            assert_eq!((f.textures, f.masks), (slot < 4, slot == 4), "slot {slot}");
+        }
     }
 
     #[test]
