@@ -831,11 +831,12 @@ impl<'d> ClTracer<'d> {
     pub(crate) fn set_surface(&mut self, surface: &Surface) -> Result<()> {
         let device = self.device;
         let (needs, has) = (surface.features(), self.program.features());
-        let shades_paths = self.program.kernels().contains(Kernel::SamplePath);
+        // Textures and scattering models are read by the progressive kernels alone.
+        let kernels = self.program.kernels();
         if (needs.masks && !has.masks)
             || (needs.normals && !has.normals)
-            || (needs.textures && !has.textures)
-            || (shades_paths && !has.holds_models_of(&needs))
+            || (kernels.has_sampling() && needs.textures && !has.textures)
+            || (kernels.contains(Kernel::SamplePath) && !has.holds_models_of(&needs))
         {
             return Err(Error::Invalid(format!(
                 "the program was compiled for a surface with {has:?}, this one has {needs:?}"
