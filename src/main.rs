@@ -15,6 +15,7 @@ use flags::Command;
 static ALLOCATOR: cltrace::huge_pages::HugePages = cltrace::huge_pages::HugePages;
 
 fn main() -> ExitCode {
+    generic_pocl_work_groups();
     // The first Ctrl-C (or SIGTERM) asks the work to stop at its next band, sample pass or
     // measurement and keep what it has (src/interrupt.rs); a second one ends the process.
     let _ = ctrlc::set_handler(|| match interrupt::request() {
@@ -50,5 +51,19 @@ fn main() -> ExitCode {
             print_message(&format!("error: {e}"));
             ExitCode::from(e.exit_code() as u8)
         }
+    }
+}
+
+/// Has PoCL run every launch through the work-group function it compiles with the program,
+/// instead of compiling one more for each launch's shape at its first launch: that took 1.4
+/// s of a 3.6 s first render of the dragon on 2 cores, and the generic function traced as
+/// fast (docs/bench/2026-12-04-first-image.md). Other runtimes ignore the variable; one the
+/// user has set wins.
+fn generic_pocl_work_groups() {
+    const VAR: &str = "POCL_WORK_GROUP_SPECIALIZATION";
+    if std::env::var_os(VAR).is_none() {
+        // SAFETY: the first thing main does, before any other thread exists (the Ctrl-C
+        // handler's comes next) or anything reads the environment.
+        unsafe { std::env::set_var(VAR, "0") };
     }
 }

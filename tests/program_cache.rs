@@ -194,3 +194,59 @@ fn a_cache_that_cannot_be_written_does_not_fail_the_render() {
     assert_eq!(render(dir.path(), "off", "y", &[]), None);
     assert_eq!(image(dir.path(), "x"), image(dir.path(), "y"));
 }
+
+/// Regression: PoCL compiled a work-group function for each launch's shape at its first
+/// launch, 1.4 s of a first render of the dragon on 2 cores; cltrace has it use the generic
+/// one it compiles with the program. Its kernel cache (`POCL_CACHE_DIR`, PoCL 3's layout: a
+/// folder per kernel, holding one per work-group function) then holds only the generic
+/// function's folder, `0-0-0`, and no shape's, such as `8-8-1-goffs0-smallgrid`.
+#[test]
+fn pocl_compiles_no_work_group_function_for_a_launch_shape() {
+    let dir = tempfile::tempdir().unwrap();
+    let pocl_cache = dir.path().join("pocl");
+    let mut cmd = cltrace();
+    cmd.current_dir(dir.path())
+        .env_remove("POCL_WORK_GROUP_SPECIALIZATION")
+        .env("POCL_CACHE_DIR", &pocl_cache)
+        .env("CLTRACE_KERNEL_CACHE", "off")
+        .args([
+            "render",
+            "--device",
+            "Portable Computing Language",
+            "--shade",
+            "ao",
+        ])
+        .args(["--width", "24", "--height", "16", "-o", "x.png"]);
+    let out = run(cmd);
+    if !out.status.success() && text(&out.stderr).contains("no OpenCL device matches") {
+        assert!(std::env::var_os("CI").is_none(), "CI must test PoCL");
+        eprintln!("notice: PoCL is not installed: its work-group functions are not tested");
+        return;
+    }
+    succeeded(&out);
+    // Kernel folders sit two levels below the cache (a hash split in two); their children
+    // are the work-group functions.
+    let mut functions = Vec::new();
+    let children = |p: &Path| -> Vec<PathBuf> {
+        std::fs::read_dir(p)
+            .map(|d| d.map(|e| e.unwrap().path()).collect())
+            .unwrap_or_default()
+    };
+    for a in children(&pocl_cache) {
+        for b in children(&a) {
+            for kernel in children(&b) {
+                for f in children(&kernel).into_iter().filter(|f| f.is_dir()) {
+                    functions.push(f.file_name().unwrap().to_string_lossy().into_owned());
+                }
+            }
+        }
+    }
+    assert!(
+        functions.iter().any(|f| f == "0-0-0"),
+        "no generic work-group function in PoCL's cache: {functions:?}"
+    );
+    assert!(
+        functions.iter().all(|f| f == "0-0-0"),
+        "PoCL compiled work-group functions for launch shapes: {functions:?}"
+    );
+}
