@@ -104,12 +104,6 @@ pub(crate) struct Bounds {
 }
 
 impl Bounds {
-    /// The empty box: growing it by any point gives that point.
-    pub(crate) const EMPTY: Bounds = Bounds {
-        min: Vec3A::splat(f32::INFINITY),
-        max: Vec3A::splat(f32::NEG_INFINITY),
-    };
-
     /// The box `[min, max]`.
     pub(crate) fn new(min: [f32; 3], max: [f32; 3]) -> Bounds {
         Bounds {
@@ -127,25 +121,12 @@ impl Bounds {
         }
     }
 
-    /// Grows the box to hold `p`.
-    #[inline]
-    pub(crate) fn grow(&mut self, p: Vec3A) {
-        self.min = self.min.min(p);
-        self.max = self.max.max(p);
-    }
-
     /// Half the surface area, negative extents counting as zero: the SAH only compares
     /// areas, so the factor 2 is dropped.
     #[inline]
     pub(crate) fn half_area(&self) -> f32 {
         let e = (self.max - self.min).max(Vec3A::ZERO);
         e.x * e.y + e.y * e.z + e.z * e.x
-    }
-
-    /// The centre.
-    #[inline]
-    pub(crate) fn centroid(&self) -> Vec3A {
-        (self.min + self.max) * 0.5
     }
 }
 

@@ -6,13 +6,17 @@
 //! centroid-sorted position. Large nodes bin in parallel, the largest partition in
 //! parallel, and subtrees build in parallel.
 //!
+//! Each triangle moves through the build as one 32-byte record, its box stored as minimum
+//! and negated maximum (so that the union of two boxes is one `min` of each half) with its
+//! mesh index in the spare lane: a swap moves one record, and binning one update per axis.
+//!
 //! Nodes are stored in depth-first order as they are made. Large nodes split and hand
 //! their two halves to parallel tasks; each task writes its subtree into its own compact
 //! vector, and one pass at the end lays the tasks' vectors out behind the few shared top
 //! nodes, shifting child indices. Memory is touched once per node: on a virtual machine a
 //! fresh page costs microseconds, so untouched slack is worth more than it seems.
 
-use glam::Vec3A;
+use glam::{BVec4A, Vec3A, Vec4};
 use rayon::prelude::*;
 
 use super::{BuildOptions, Builder, Bvh, INTERSECTION_COST, TRAVERSAL_COST};
@@ -30,78 +34,133 @@ const PARALLEL_PARTITION: usize = 1 << 20;
 /// The most bins per axis [`BuildOptions::bins`] may ask for (a power of two).
 pub(super) const MAX_BINS: usize = 64;
 
-/// A box as the node that holds it.
-trait NodeBox {
-    fn node(&self, left_or_first: u32, right_or_count: u32) -> Bin32Node;
+/// A box as its minimum and negated maximum, each in a 4-lane vector whose fourth lane is
+/// spare: the union of two boxes is then one `min` per half.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(32))]
+struct Aabb {
+    lo: Vec4,
+    hi: Vec4,
 }
 
-impl NodeBox for Bounds {
+/// A triangle as the build moves it: its box, with its mesh index in the fourth lane of
+/// `lo` (the index's bits XOR [`ID_BITS`], which makes them an ordinary float for any mesh
+/// under a billion triangles: arithmetic on a subnormal lane is many times slower).
+type Prim = Aabb;
+
+/// See [`Prim`].
+const ID_BITS: u32 = 0x4000_0000;
+
+impl Aabb {
+    /// The empty box: its union with any box is that box.
+    const EMPTY: Aabb = Aabb {
+        lo: Vec4::INFINITY,
+        hi: Vec4::INFINITY,
+    };
+
+    /// Triangle `id`, whose box is `b`.
+    fn prim(b: Bounds, id: u32) -> Prim {
+        Aabb {
+            lo: b.min.extend(f32::from_bits(id ^ ID_BITS)),
+            hi: (-b.max).extend(0.0),
+        }
+    }
+
+    /// The mesh index of a [`Prim`].
+    fn id(&self) -> u32 {
+        self.lo.w.to_bits() ^ ID_BITS
+    }
+
+    #[inline(always)]
+    fn union(self, o: Aabb) -> Aabb {
+        Aabb {
+            lo: self.lo.min(o.lo),
+            hi: self.hi.min(o.hi),
+        }
+    }
+
+    /// Grows the box to hold point `p` (its first three lanes).
+    #[inline(always)]
+    fn grow(&mut self, p: Vec4) {
+        self.lo = self.lo.min(p);
+        self.hi = self.hi.min(-p);
+    }
+
+    /// Half the surface area, as [`Bounds::half_area`].
+    #[inline(always)]
+    fn half_area(&self) -> f32 {
+        let e = (-self.hi - self.lo).max(Vec4::ZERO);
+        e.x * e.y + e.y * e.z + e.z * e.x
+    }
+
+    /// The centre in the first three lanes: `(min + max) / 2`, exactly.
+    #[inline(always)]
+    fn centroid(&self) -> Vec4 {
+        (self.lo - self.hi) * 0.5
+    }
+
+    fn min(&self) -> Vec3A {
+        Vec3A::from_vec4(self.lo)
+    }
+
+    fn max(&self) -> Vec3A {
+        -Vec3A::from_vec4(self.hi)
+    }
+
+    /// The box as the node that holds it.
     fn node(&self, left_or_first: u32, right_or_count: u32) -> Bin32Node {
         Bin32Node {
-            min: self.min.to_array(),
+            min: self.min().to_array(),
             left_or_first,
-            max: self.max.to_array(),
+            max: self.max().to_array(),
             right_or_count,
         }
     }
 }
 
-/// The triangles of one node: their boxes and mesh indices, permuted together.
+/// The triangles of one node.
 struct Prims<'a> {
-    boxes: &'a mut [Bounds],
-    ids: &'a mut [u32],
-    /// Position of `boxes[0]` in the whole leaf order.
+    prims: &'a mut [Prim],
+    /// Position of `prims[0]` in the whole leaf order.
     first: u32,
 }
 
 impl Prims<'_> {
     fn len(&self) -> usize {
-        self.boxes.len()
+        self.prims.len()
     }
 
     fn split_at(self, mid: usize) -> (Self, Self) {
-        let (lb, rb) = self.boxes.split_at_mut(mid);
-        let (li, ri) = self.ids.split_at_mut(mid);
+        let (l, r) = self.prims.split_at_mut(mid);
         (
             Prims {
-                boxes: lb,
-                ids: li,
+                prims: l,
                 first: self.first,
             },
             Prims {
-                boxes: rb,
-                ids: ri,
+                prims: r,
                 first: self.first + mid as u32,
             },
         )
     }
 
-    fn swap(&mut self, a: usize, b: usize) {
-        self.boxes.swap(a, b);
-        self.ids.swap(a, b);
-    }
-
     /// Box and centroid box of all the triangles.
     fn bounds(&self) -> Side {
-        let fold = |(b, c): (Bounds, Bounds), p: &Bounds| {
-            let mut c = c;
-            c.grow(p.centroid());
-            (b.union(*p), c)
-        };
-        let empty = (Bounds::EMPTY, Bounds::EMPTY);
         if self.len() > PARALLEL_BINNING {
-            self.boxes
+            self.prims
                 .par_chunks(1 << 14)
-                .map(|c| c.iter().fold(empty, fold))
-                .reduce(|| empty, |(a, b), (c, d)| (a.union(c), b.union(d)))
+                .map(side_bounds)
+                .reduce(|| EMPTY_SIDE, |(a, b), (c, d)| (a.union(c), b.union(d)))
         } else {
-            self.boxes.iter().fold(empty, fold)
+            side_bounds(self.prims)
         }
     }
 }
 
 /// A child's box and the box of its triangles' centroids.
-type Side = (Bounds, Bounds);
+type Side = (Aabb, Aabb);
+
+const EMPTY_SIDE: Side = (Aabb::EMPTY, Aabb::EMPTY);
 
 /// The outcome of looking for a split.
 enum Split {
@@ -124,8 +183,7 @@ struct Scratch {
     order: Vec<u32>,
     keys: Vec<u64>,
     right_area: Vec<f32>,
-    boxes: Vec<Bounds>,
-    ids: Vec<u32>,
+    prims: Vec<Prim>,
 }
 
 impl Scratch {
@@ -135,8 +193,7 @@ impl Scratch {
             order: Vec::new(),
             keys: Vec::new(),
             right_area: Vec::new(),
-            boxes: Vec::new(),
-            ids: Vec::new(),
+            prims: Vec::new(),
         }
     }
 }
@@ -144,21 +201,20 @@ impl Scratch {
 pub(super) fn build(mesh: &Mesh, options: &BuildOptions) -> Bvh {
     let n = mesh.triangle_count();
     assert!(n > 0, "a checked mesh has triangles");
-    let mut boxes: Vec<Bounds> = (0..n)
+    let mut records: Vec<Prim> = (0..n)
         .into_par_iter()
         .with_min_len(4096)
         .map(|i| {
             let [a, b, c] = mesh.corners(i).map(Vec3A::from);
-            Bounds {
+            let bounds = Bounds {
                 min: a.min(b).min(c),
                 max: a.max(b).max(c),
-            }
+            };
+            Aabb::prim(bounds, i as u32)
         })
         .collect();
-    let mut ids: Vec<u32> = (0..n as u32).into_par_iter().collect();
     let prims = Prims {
-        boxes: &mut boxes,
-        ids: &mut ids,
+        prims: &mut records,
         first: 0,
     };
     let bounds = prims.bounds();
@@ -170,7 +226,11 @@ pub(super) fn build(mesh: &Mesh, options: &BuildOptions) -> Bvh {
     tree.lay_out(&mut nodes, 0);
     Bvh {
         nodes,
-        prim_order: ids,
+        prim_order: records
+            .par_iter()
+            .with_min_len(4096)
+            .map(Prim::id)
+            .collect(),
         depth,
     }
 }
@@ -331,32 +391,32 @@ impl Ctx {
     fn binned_split(
         &self,
         prims: &mut Prims,
-        bounds: Bounds,
-        centroids: Bounds,
+        bounds: Aabb,
+        centroids: Aabb,
         may_be_leaf: bool,
         table: &mut BinTable,
     ) -> Split {
         // Small nodes use fewer bins: a few triangles gain nothing from many planes.
         let bins = (self.options.bins as usize).min((prims.len() / 4).max(8));
         table.reset(bins);
-        let extent = centroids.max - centroids.min;
+        let cmin = centroids.lo;
+        let extent = -centroids.hi - cmin;
         // Slightly under `bins / extent`, so the largest centroid still lands in the last
-        // bin. An extent so thin that the scale overflows counts as flat.
-        let scale = Vec3A::splat(bins as f32 * (1.0 - 1e-6)) / extent;
-        let usable = extent.cmpgt(Vec3A::ZERO) & scale.is_finite_mask();
-        let scale = Vec3A::select(usable, scale, Vec3A::ZERO);
-        let extent = Vec3A::select(usable, extent, Vec3A::ZERO);
-        let last = Vec3A::splat((bins - 1) as f32);
-        let bin_of = |p: &Bounds| -> [u8; 3] {
-            // In [0, bins - 1] for a checked mesh; `as` saturates anything else (NaN to 0),
-            // so even an unchecked mesh cannot index out of the bins.
-            let k = ((p.centroid() - centroids.min) * scale).min(last);
-            [k.x as u8, k.y as u8, k.z as u8]
-        };
+        // bin. An extent so thin that the scale overflows counts as flat. The spare lane
+        // counts as flat too.
+        let scale = Vec4::splat(bins as f32 * (1.0 - 1e-6)) / extent;
+        let usable = extent.cmpgt(Vec4::ZERO)
+            & scale.is_finite_mask()
+            & BVec4A::new(true, true, true, false);
+        let scale = Vec4::select(usable, scale, Vec4::ZERO);
+        let extent = Vec4::select(usable, extent, Vec4::ZERO);
+        let last = Vec4::splat((bins - 1) as f32);
+        // By value, so that the loop keeps them in registers.
+        let bin_of = move |p: &Prim| bin_indices(((p.centroid() - cmin) * scale).min(last));
 
         if prims.len() > PARALLEL_BINNING {
             *table = prims
-                .boxes
+                .prims
                 .par_chunks(1 << 14)
                 .map(|chunk| {
                     let mut t = BinTable::new(bins);
@@ -365,7 +425,7 @@ impl Ctx {
                 })
                 .reduce(|| BinTable::new(bins), BinTable::merged);
         } else {
-            table.add(prims.boxes, &bin_of);
+            table.add(prims.prims, &bin_of);
         }
 
         // For each axis, sweep the planes between bins: right-to-left areas first, then
@@ -376,13 +436,13 @@ impl Ctx {
                 continue;
             }
             let (boxes, counts, right_area) = table.axis_mut(axis);
-            let mut acc = Bounds::EMPTY;
+            let mut acc = Aabb::EMPTY;
             for k in (1..bins).rev() {
                 acc = acc.union(boxes[k]);
                 right_area[k] = acc.half_area();
             }
             let total: u32 = counts.iter().sum();
-            let mut left = Bounds::EMPTY;
+            let mut left = Aabb::EMPTY;
             let mut left_count = 0u32;
             for k in 1..bins {
                 left = left.union(boxes[k - 1]);
@@ -410,25 +470,19 @@ impl Ctx {
         let (boxes, _) = table.axis(axis);
         let left_box = boxes[..split_bin]
             .iter()
-            .fold(Bounds::EMPTY, |a, b| a.union(*b));
+            .fold(Aabb::EMPTY, |a, b| a.union(*b));
         let right_box = boxes[split_bin..]
             .iter()
-            .fold(Bounds::EMPTY, |a, b| a.union(*b));
+            .fold(Aabb::EMPTY, |a, b| a.union(*b));
         // floor(f) < split_bin exactly when f < split_bin, f being the same lane product the
         // binning floored.
         let plane = split_bin as f32;
-        let goes_left = |p: &Bounds| ((p.centroid() - centroids.min) * scale)[axis] < plane;
+        let goes_left = |c: Vec4| ((c - cmin) * scale)[axis] < plane;
         let (i, lc, rc) = match (prims.len() > PARALLEL_PARTITION, axis) {
-            (true, _) => parallel_partition(prims, goes_left),
-            (false, 0) => partition(prims, |p| {
-                ((p.centroid() - centroids.min) * scale).x < plane
-            }),
-            (false, 1) => partition(prims, |p| {
-                ((p.centroid() - centroids.min) * scale).y < plane
-            }),
-            (false, _) => partition(prims, |p| {
-                ((p.centroid() - centroids.min) * scale).z < plane
-            }),
+            (true, _) => parallel_partition(prims.prims, goes_left),
+            (false, 0) => partition(prims.prims, |c| ((c - cmin) * scale).x < plane),
+            (false, 1) => partition(prims.prims, |c| ((c - cmin) * scale).y < plane),
+            (false, _) => partition(prims.prims, |c| ((c - cmin) * scale).z < plane),
         };
         Split::At {
             mid: i,
@@ -438,23 +492,49 @@ impl Ctx {
     }
 }
 
-/// Moves the triangles for which `goes_left` holds to the front, without branches
+/// The bin indices of a centroid's grid coordinates `k` (in `[0, bins)` for a checked mesh),
+/// truncated in one vector conversion. An unchecked mesh's NaN or negative coordinates give
+/// indices that [`BinTable`] masks into its allocated bins.
+#[inline(always)]
+fn bin_indices(k: Vec4) -> [u32; 3] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_cvttps_epi32, _mm_storeu_si128};
+        let mut lanes = [0u32; 4];
+        // SAFETY: SSE2 is part of x86_64; the store writes 16 bytes into 16 bytes.
+        unsafe { _mm_storeu_si128(lanes.as_mut_ptr().cast(), _mm_cvttps_epi32(k.into())) };
+        [lanes[0], lanes[1], lanes[2]]
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        [k.x as u32, k.y as u32, k.z as u32]
+    }
+}
+
+/// Moves the triangles whose centroid `goes_left` to the front, without branches
 /// (Lomuto's scheme with an unconditional swap: data-dependent branches mispredict half
 /// the time near the root). Returns the left count and both sides' centroid boxes.
 #[inline]
-fn partition(prims: &mut Prims, goes_left: impl Fn(&Bounds) -> bool) -> (usize, Bounds, Bounds) {
-    let (mut lc, mut rc) = (Bounds::EMPTY, Bounds::EMPTY);
+fn partition(prims: &mut [Prim], goes_left: impl Fn(Vec4) -> bool) -> (usize, Aabb, Aabb) {
+    let (mut lc, mut rc) = (Aabb::EMPTY, Aabb::EMPTY);
     let mut left = 0;
     for i in 0..prims.len() {
-        let p = prims.boxes[i];
+        let p = prims[i];
         let c = p.centroid();
-        let is_left = goes_left(&p);
-        let mask = glam::BVec3A::splat(is_left);
-        lc.min = Vec3A::select(mask, lc.min.min(c), lc.min);
-        lc.max = Vec3A::select(mask, lc.max.max(c), lc.max);
-        rc.min = Vec3A::select(mask, rc.min, rc.min.min(c));
-        rc.max = Vec3A::select(mask, rc.max, rc.max.max(c));
-        prims.swap(i, left);
+        let is_left = goes_left(c);
+        // The centroid as a box, and an empty box: the side it joins takes the first.
+        let (point, none) = (Aabb { lo: c, hi: -c }, Aabb::EMPTY);
+        let mask = BVec4A::splat(is_left);
+        lc = lc.union(Aabb {
+            lo: Vec4::select(mask, point.lo, none.lo),
+            hi: Vec4::select(mask, point.hi, none.hi),
+        });
+        rc = rc.union(Aabb {
+            lo: Vec4::select(mask, none.lo, point.lo),
+            hi: Vec4::select(mask, none.hi, point.hi),
+        });
+        prims[i] = prims[left];
+        prims[left] = p;
         left += is_left as usize;
     }
     (left, lc, rc)
@@ -465,26 +545,17 @@ fn partition(prims: &mut Prims, goes_left: impl Fn(&Bounds) -> bool) -> (usize, 
 /// left-side ones behind it, pair by pair in order, in pieces of a chunk's size. Near the
 /// root a sequential partition of every triangle would leave all but a few cores idle.
 fn parallel_partition(
-    prims: &mut Prims,
-    goes_left: impl Fn(&Bounds) -> bool + Sync,
-) -> (usize, Bounds, Bounds) {
+    prims: &mut [Prim],
+    goes_left: impl Fn(Vec4) -> bool + Sync,
+) -> (usize, Aabb, Aabb) {
     const CHUNK: usize = 1 << 14;
     let n = prims.len();
-    let parts: Vec<(usize, Bounds, Bounds)> = prims
-        .boxes
+    let parts: Vec<(usize, Aabb, Aabb)> = prims
         .par_chunks_mut(CHUNK)
-        .zip(prims.ids.par_chunks_mut(CHUNK))
-        .map(|(boxes, ids)| {
-            let mut chunk = Prims {
-                boxes,
-                ids,
-                first: 0,
-            };
-            partition(&mut chunk, &goes_left)
-        })
+        .map(|chunk| partition(chunk, &goes_left))
         .collect();
     let left: usize = parts.iter().map(|p| p.0).sum();
-    let (mut lc, mut rc) = (Bounds::EMPTY, Bounds::EMPTY);
+    let (mut lc, mut rc) = (Aabb::EMPTY, Aabb::EMPTY);
     // Triangles on the wrong side of `left`: chunks' right parts before it, their left
     // parts after it. There are as many of one as of the other.
     let (mut wrong_right, mut wrong_left) = (Vec::new(), Vec::new());
@@ -517,18 +588,12 @@ fn parallel_partition(
         }
     }
     debug_assert!(ra.is_none() && rb.is_none(), "as many wrong on each side");
-    let (boxes_front, boxes_back) = prims.boxes.split_at_mut(left);
-    let (ids_front, ids_back) = prims.ids.split_at_mut(left);
-    let front = carve(boxes_front, &a_pieces, 0).zip(carve(ids_front, &a_pieces, 0));
-    let back = carve(boxes_back, &b_pieces, left).zip(carve(ids_back, &b_pieces, left));
-    front
-        .zip(back)
+    let (front, back) = prims.split_at_mut(left);
+    carve(front, &a_pieces, 0)
+        .zip(carve(back, &b_pieces, left))
         .collect::<Vec<_>>()
         .into_par_iter()
-        .for_each(|((fb, fi), (bb, bi))| {
-            fb.swap_with_slice(bb);
-            fi.swap_with_slice(bi);
-        });
+        .for_each(|(f, b)| f.swap_with_slice(b));
     (left, lc, rc)
 }
 
@@ -562,10 +627,10 @@ fn leaf_is_cheaper(n: usize, half_area: f32, split: f32) -> bool {
 /// `MAX_BINS - 1` (a no-op, as they are below `bins`), so indexing needs no bounds checks.
 struct BinTable {
     bins: usize,
-    boxes: Box<[[Bounds; MAX_BINS]; 3]>,
+    boxes: Box<[[Aabb; MAX_BINS]; 3]>,
     counts: Box<[[u32; MAX_BINS]; 3]>,
     /// A second set of bins for every other triangle (see [`BinTable::add`]).
-    odd_boxes: Box<[[Bounds; MAX_BINS]; 3]>,
+    odd_boxes: Box<[[Aabb; MAX_BINS]; 3]>,
     odd_counts: Box<[[u32; MAX_BINS]; 3]>,
     /// Sweep workspace: area of the bins right of each plane.
     right_area: Box<[f32; MAX_BINS]>,
@@ -575,9 +640,9 @@ impl BinTable {
     fn new(bins: usize) -> Self {
         let mut t = BinTable {
             bins,
-            boxes: Box::new([[Bounds::EMPTY; MAX_BINS]; 3]),
+            boxes: Box::new([[Aabb::EMPTY; MAX_BINS]; 3]),
             counts: Box::new([[0; MAX_BINS]; 3]),
-            odd_boxes: Box::new([[Bounds::EMPTY; MAX_BINS]; 3]),
+            odd_boxes: Box::new([[Aabb::EMPTY; MAX_BINS]; 3]),
             odd_counts: Box::new([[0; MAX_BINS]; 3]),
             right_area: Box::new([0.0; MAX_BINS]),
         };
@@ -589,9 +654,9 @@ impl BinTable {
     fn reset(&mut self, bins: usize) {
         self.bins = bins;
         for axis in 0..3 {
-            self.boxes[axis][..bins].fill(Bounds::EMPTY);
+            self.boxes[axis][..bins].fill(Aabb::EMPTY);
             self.counts[axis][..bins].fill(0);
-            self.odd_boxes[axis][..bins].fill(Bounds::EMPTY);
+            self.odd_boxes[axis][..bins].fill(Aabb::EMPTY);
             self.odd_counts[axis][..bins].fill(0);
         }
     }
@@ -601,13 +666,13 @@ impl BinTable {
     /// even and odd triangles go to separate bin sets, merged at the end, so that two
     /// updates are always in flight.
     #[inline]
-    fn add(&mut self, prims: &[Bounds], bin_of: &impl Fn(&Bounds) -> [u8; 3]) {
+    fn add(&mut self, prims: &[Prim], bin_of: &impl Fn(&Prim) -> [u32; 3]) {
         #[inline(always)]
         fn put(
-            boxes: &mut [[Bounds; MAX_BINS]; 3],
+            boxes: &mut [[Aabb; MAX_BINS]; 3],
             counts: &mut [[u32; MAX_BINS]; 3],
-            p: &Bounds,
-            k: [u8; 3],
+            p: &Prim,
+            k: [u32; 3],
         ) {
             for axis in 0..3 {
                 let k = k[axis] as usize & (MAX_BINS - 1);
@@ -642,14 +707,14 @@ impl BinTable {
         self
     }
 
-    fn axis(&self, axis: usize) -> (&[Bounds], &[u32]) {
+    fn axis(&self, axis: usize) -> (&[Aabb], &[u32]) {
         (
             &self.boxes[axis][..self.bins],
             &self.counts[axis][..self.bins],
         )
     }
 
-    fn axis_mut(&mut self, axis: usize) -> (&[Bounds], &[u32], &mut [f32]) {
+    fn axis_mut(&mut self, axis: usize) -> (&[Aabb], &[u32], &mut [f32]) {
         (
             &self.boxes[axis][..self.bins],
             &self.counts[axis][..self.bins],
@@ -659,12 +724,7 @@ impl BinTable {
 }
 
 /// The exact SAH split: for each axis, sort by centroid and price every position.
-fn sweep_split(
-    prims: &mut Prims,
-    bounds: Bounds,
-    may_be_leaf: bool,
-    scratch: &mut Scratch,
-) -> Split {
+fn sweep_split(prims: &mut Prims, bounds: Aabb, may_be_leaf: bool, scratch: &mut Scratch) -> Split {
     let n = prims.len();
     let mut order = std::mem::take(&mut scratch.order);
     let mut keys = std::mem::take(&mut scratch.keys);
@@ -674,27 +734,26 @@ fn sweep_split(
     right_area.resize(n, 0.0);
     // Sorts by (centroid, index) packed in one integer: the f32 bits made monotonic above,
     // the index below, so that ties break the same way every time.
-    let sort_by_axis =
-        |order: &mut Vec<u32>, keys: &mut Vec<u64>, axis: usize, boxes: &[Bounds]| {
-            keys.clear();
-            keys.extend(boxes.iter().enumerate().map(|(i, b)| {
-                let bits = b.centroid()[axis].to_bits();
-                let ordered = if bits >> 31 == 1 {
-                    !bits
-                } else {
-                    bits | 1 << 31
-                };
-                (ordered as u64) << 32 | i as u64
-            }));
-            keys.sort_unstable();
-            order.clear();
-            order.extend(keys.iter().map(|&k| k as u32));
-        };
+    let sort_by_axis = |order: &mut Vec<u32>, keys: &mut Vec<u64>, axis: usize, boxes: &[Prim]| {
+        keys.clear();
+        keys.extend(boxes.iter().enumerate().map(|(i, b)| {
+            let bits = b.centroid()[axis].to_bits();
+            let ordered = if bits >> 31 == 1 {
+                !bits
+            } else {
+                bits | 1 << 31
+            };
+            (ordered as u64) << 32 | i as u64
+        }));
+        keys.sort_unstable();
+        order.clear();
+        order.extend(keys.iter().map(|&k| k as u32));
+    };
     for axis in 0..3 {
-        sort_by_axis(&mut order, &mut keys, axis, prims.boxes);
+        sort_by_axis(&mut order, &mut keys, axis, prims.prims);
         sweep_costs(
             n,
-            |k| prims.boxes[order[k] as usize],
+            |k| prims.prims[order[k] as usize],
             right_area,
             |cost, k| {
                 if best.is_none_or(|(c, _, _)| cost < c) {
@@ -707,7 +766,7 @@ fn sweep_split(
     let leaf = may_be_leaf && leaf_is_cheaper(n, bounds.half_area(), cost);
     if !leaf {
         if axis != 2 {
-            sort_by_axis(&mut order, &mut keys, axis, prims.boxes);
+            sort_by_axis(&mut order, &mut keys, axis, prims.prims);
         }
         apply_order(prims, &order, scratch);
     }
@@ -717,8 +776,8 @@ fn sweep_split(
         return Split::Leaf;
     }
     let (l, r) = (
-        side_bounds(&prims.boxes[..mid]),
-        side_bounds(&prims.boxes[mid..]),
+        side_bounds(&prims.prims[..mid]),
+        side_bounds(&prims.prims[mid..]),
     );
     Split::At {
         mid,
@@ -733,16 +792,16 @@ fn sweep_split(
 #[inline(always)]
 fn sweep_costs(
     n: usize,
-    box_at: impl Fn(usize) -> Bounds,
+    box_at: impl Fn(usize) -> Aabb,
     right_area: &mut [f32],
     mut keep: impl FnMut(f32, usize),
 ) {
-    let mut acc = Bounds::EMPTY;
+    let mut acc = Aabb::EMPTY;
     for k in (1..n).rev() {
         acc = acc.union(box_at(k));
         right_area[k] = acc.half_area();
     }
-    let mut left = Bounds::EMPTY;
+    let mut left = Aabb::EMPTY;
     for (k, &right) in right_area[..n].iter().enumerate().skip(1) {
         left = left.union(box_at(k - 1));
         keep(left.half_area() * k as f32 + right * (n - k) as f32, k);
@@ -754,24 +813,16 @@ const SMALL: usize = 4;
 
 /// [`sweep_split`] for at most [`SMALL`] triangles: insertion sorts of a few centroids on the
 /// stack. Same splits, same tie-breaking (by position), a fraction of the work.
-fn small_sweep_split(prims: &mut Prims, bounds: Bounds, may_be_leaf: bool) -> Split {
+fn small_sweep_split(prims: &mut Prims, bounds: Aabb, may_be_leaf: bool) -> Split {
     let n = prims.len();
     debug_assert!((2..=SMALL).contains(&n));
     if n == 2 {
         // One way to split two triangles, whatever the axis: no sorting needed.
-        let (a, b) = (prims.boxes[0], prims.boxes[1]);
+        let (a, b) = (prims.prims[0], prims.prims[1]);
         if may_be_leaf && leaf_is_cheaper(2, bounds.half_area(), a.half_area() + b.half_area()) {
             return Split::Leaf;
         }
-        let one = |p: Bounds| {
-            (
-                p,
-                Bounds {
-                    min: p.centroid(),
-                    max: p.centroid(),
-                },
-            )
-        };
+        let one = |p: Prim| side_bounds(&[p]);
         return Split::At {
             mid: 1,
             left: one(a),
@@ -779,7 +830,7 @@ fn small_sweep_split(prims: &mut Prims, bounds: Bounds, may_be_leaf: bool) -> Sp
         };
     }
     let mut keys = [[0.0f32; SMALL]; 3];
-    for (i, b) in prims.boxes.iter().enumerate() {
+    for (i, b) in prims.prims.iter().enumerate() {
         let c = b.centroid();
         keys[0][i] = c.x;
         keys[1][i] = c.y;
@@ -801,7 +852,7 @@ fn small_sweep_split(prims: &mut Prims, bounds: Bounds, may_be_leaf: bool) -> Sp
         let mut right_area = [0.0f32; SMALL];
         sweep_costs(
             n,
-            |k| prims.boxes[order[k] as usize],
+            |k| prims.prims[order[k] as usize],
             &mut right_area,
             |cost, k| {
                 if best.is_none_or(|(c, _)| cost < c) {
@@ -821,38 +872,32 @@ fn small_sweep_split(prims: &mut Prims, bounds: Bounds, may_be_leaf: bool) -> Sp
         if done & (1 << start) != 0 {
             continue;
         }
-        let (first_box, first_id) = (prims.boxes[start], prims.ids[start]);
+        let first = prims.prims[start];
         let mut i = start;
         loop {
             done |= 1 << i;
             let from = best_order[i] as usize;
             if from == start {
-                prims.boxes[i] = first_box;
-                prims.ids[i] = first_id;
+                prims.prims[i] = first;
                 break;
             }
-            prims.boxes[i] = prims.boxes[from];
-            prims.ids[i] = prims.ids[from];
+            prims.prims[i] = prims.prims[from];
             i = from;
         }
     }
     Split::At {
         mid,
-        left: side_bounds(&prims.boxes[..mid]),
-        right: side_bounds(&prims.boxes[mid..]),
+        left: side_bounds(&prims.prims[..mid]),
+        right: side_bounds(&prims.prims[mid..]),
     }
 }
 
 /// Splits at the middle by count, ordered along the centroids' widest axis: the fallback
 /// when centroids coincide, and the way to keep depth bounded.
-fn median_split(
-    prims: &mut Prims,
-    centroids: Bounds,
-    scratch: &mut Scratch,
-) -> (usize, Side, Side) {
+fn median_split(prims: &mut Prims, centroids: Aabb, scratch: &mut Scratch) -> (usize, Side, Side) {
     let n = prims.len();
     let mid = n / 2;
-    let extent = centroids.max - centroids.min;
+    let extent = centroids.max() - centroids.min();
     if extent.max_element() > 0.0 {
         let axis = if extent.x >= extent.y && extent.x >= extent.z {
             0
@@ -864,8 +909,8 @@ fn median_split(
         let mut order: Vec<u32> = (0..n as u32).collect();
         order.select_nth_unstable_by(mid, |&a, &b| {
             let (ca, cb) = (
-                prims.boxes[a as usize].centroid()[axis],
-                prims.boxes[b as usize].centroid()[axis],
+                prims.prims[a as usize].centroid()[axis],
+                prims.prims[b as usize].centroid()[axis],
             );
             ca.total_cmp(&cb)
         });
@@ -873,47 +918,56 @@ fn median_split(
     }
     (
         mid,
-        side_bounds(&prims.boxes[..mid]),
-        side_bounds(&prims.boxes[mid..]),
+        side_bounds(&prims.prims[..mid]),
+        side_bounds(&prims.prims[mid..]),
     )
 }
 
-fn side_bounds(boxes: &[Bounds]) -> Side {
-    boxes
-        .iter()
-        .fold((Bounds::EMPTY, Bounds::EMPTY), |(b, mut c), p| {
-            c.grow(p.centroid());
-            (b.union(*p), c)
-        })
+/// The box and the centroid box of `prims`.
+fn side_bounds(prims: &[Prim]) -> Side {
+    prims.iter().fold(EMPTY_SIDE, |(b, mut c), p| {
+        c.grow(p.centroid());
+        (b.union(*p), c)
+    })
 }
 
 /// Permutes the triangles so that position `i` holds what was at `order[i]`.
 fn apply_order(prims: &mut Prims, order: &[u32], scratch: &mut Scratch) {
-    scratch.boxes.clear();
+    scratch.prims.clear();
     scratch
-        .boxes
-        .extend(order.iter().map(|&i| prims.boxes[i as usize]));
-    scratch.ids.clear();
-    scratch
-        .ids
-        .extend(order.iter().map(|&i| prims.ids[i as usize]));
-    prims.boxes.copy_from_slice(&scratch.boxes);
-    prims.ids.copy_from_slice(&scratch.ids);
+        .prims
+        .extend(order.iter().map(|&i| prims.prims[i as usize]));
+    prims.prims.copy_from_slice(&scratch.prims);
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Boxes around points in a pseudo-random order, and a plane through the middle.
-    fn scattered(n: usize) -> (Vec<Bounds>, Vec<u32>) {
-        let boxes = (0..n as u64)
+    /// Unit boxes at pseudo-random places along x, triangle `i` at position `i`.
+    fn scattered(n: usize) -> Vec<Prim> {
+        (0..n as u64)
             .map(|i| {
                 let x = (i.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40) as f32;
-                Bounds::new([x, 0.0, 0.0], [x + 1.0, 1.0, 1.0])
+                Aabb::prim(Bounds::new([x, 0.0, 0.0], [x + 1.0, 1.0, 1.0]), i as u32)
             })
-            .collect();
-        (boxes, (0..n as u32).collect())
+            .collect()
+    }
+
+    #[test]
+    fn a_record_keeps_its_box_and_mesh_index() {
+        let b = Bounds::new([-1.5, 2.0, 0.25], [3.0, 2.5, 8.0]);
+        for id in [0, 1, 12_345, (1 << 23) - 1, 1 << 23, 999_999_999, u32::MAX] {
+            let p = Aabb::prim(b, id);
+            assert_eq!(p.id(), id);
+            assert_eq!((p.min(), p.max()), (b.min, b.max));
+            assert_eq!(p.half_area(), b.half_area());
+            assert_eq!(Vec3A::from_vec4(p.centroid()), (b.min + b.max) * 0.5);
+        }
+        // Meshes under a billion triangles keep their indices out of the subnormal range.
+        for id in [0, 1 << 20, 999_999_999] {
+            assert!(Aabb::prim(b, id).lo.w.is_normal(), "{id}");
+        }
     }
 
     #[test]
@@ -921,32 +975,20 @@ mod tests {
         // Sizes around the chunk size, so that misplaced runs start and end mid-chunk.
         for n in [1, 5000, (1 << 14) + 1, 3 * (1 << 14) - 7, 200_000] {
             for threshold in [0.0, 0.3, 0.5, 0.97, 2.0] {
-                let (mut boxes, mut ids) = scattered(n);
-                let (mut seq_boxes, mut seq_ids) = (boxes.clone(), ids.clone());
+                let mut prims = scattered(n);
+                let mut seq = prims.clone();
                 let cut = threshold * (1 << 24) as f32;
-                let goes_left = |b: &Bounds| b.min.x < cut;
-                let mut prims = Prims {
-                    boxes: &mut boxes,
-                    ids: &mut ids,
-                    first: 0,
-                };
+                let goes_left = |c: Vec4| c.x < cut;
                 let (left, lc, rc) = parallel_partition(&mut prims, goes_left);
-                let mut seq = Prims {
-                    boxes: &mut seq_boxes,
-                    ids: &mut seq_ids,
-                    first: 0,
-                };
                 let expected = partition(&mut seq, goes_left);
                 assert_eq!((left, lc, rc), expected, "{n} triangles, {threshold}");
-                assert!(boxes[..left].iter().all(goes_left), "{n}, {threshold}");
-                assert!(!boxes[left..].iter().any(goes_left), "{n}, {threshold}");
-                // Boxes and indices moved together, and every triangle is still there once.
-                let (original, _) = scattered(n);
-                assert!(
-                    ids.iter()
-                        .zip(&boxes)
-                        .all(|(&i, b)| original[i as usize] == *b)
-                );
+                let left_of = |p: &Prim| goes_left(p.centroid());
+                assert!(prims[..left].iter().all(left_of), "{n}, {threshold}");
+                assert!(!prims[left..].iter().any(left_of), "{n}, {threshold}");
+                // Every triangle is still there once, with its own box.
+                let original = scattered(n);
+                assert!(prims.iter().all(|p| original[p.id() as usize] == *p));
+                let mut ids: Vec<u32> = prims.iter().map(Prim::id).collect();
                 ids.sort_unstable();
                 assert!(ids.iter().enumerate().all(|(k, &i)| k as u32 == i));
             }
