@@ -79,11 +79,19 @@ impl Aabb {
         }
     }
 
-    /// Grows the box to hold point `p` (its first three lanes).
+    /// The box of point `p` (its first three lanes).
     #[inline(always)]
-    fn grow(&mut self, p: Vec4) {
-        self.lo = self.lo.min(p);
-        self.hi = self.hi.min(-p);
+    fn point(p: Vec4) -> Aabb {
+        Aabb { lo: p, hi: -p }
+    }
+
+    /// `a` where `mask` holds, else `b`.
+    #[inline(always)]
+    fn select(mask: BVec4A, a: Aabb, b: Aabb) -> Aabb {
+        Aabb {
+            lo: Vec4::select(mask, a.lo, b.lo),
+            hi: Vec4::select(mask, a.hi, b.hi),
+        }
     }
 
     /// Half the surface area, as [`Bounds::half_area`].
@@ -522,17 +530,10 @@ fn partition(prims: &mut [Prim], goes_left: impl Fn(Vec4) -> bool) -> (usize, Aa
         let p = prims[i];
         let c = p.centroid();
         let is_left = goes_left(c);
-        // The centroid as a box, and an empty box: the side it joins takes the first.
-        let (point, none) = (Aabb { lo: c, hi: -c }, Aabb::EMPTY);
-        let mask = BVec4A::splat(is_left);
-        lc = lc.union(Aabb {
-            lo: Vec4::select(mask, point.lo, none.lo),
-            hi: Vec4::select(mask, point.hi, none.hi),
-        });
-        rc = rc.union(Aabb {
-            lo: Vec4::select(mask, none.lo, point.lo),
-            hi: Vec4::select(mask, none.hi, point.hi),
-        });
+        // The side the centroid joins grows by it, the other by an empty box.
+        let (point, mask) = (Aabb::point(c), BVec4A::splat(is_left));
+        lc = lc.union(Aabb::select(mask, point, Aabb::EMPTY));
+        rc = rc.union(Aabb::select(mask, Aabb::EMPTY, point));
         prims[i] = prims[left];
         prims[left] = p;
         left += is_left as usize;
@@ -925,9 +926,8 @@ fn median_split(prims: &mut Prims, centroids: Aabb, scratch: &mut Scratch) -> (u
 
 /// The box and the centroid box of `prims`.
 fn side_bounds(prims: &[Prim]) -> Side {
-    prims.iter().fold(EMPTY_SIDE, |(b, mut c), p| {
-        c.grow(p.centroid());
-        (b.union(*p), c)
+    prims.iter().fold(EMPTY_SIDE, |(b, c), p| {
+        (b.union(*p), c.union(Aabb::point(p.centroid())))
     })
 }
 
