@@ -556,6 +556,70 @@ fn bench_diffuse_16_rows_trace_sixteen_rays_for_each_diffuse_one() {
     assert!(rows.iter().all(|r| r.2 > 0.0), "{rows:?}");
 }
 
+/// `--work-group` launches every kernel the bench measures in that shape: an odd one (the
+/// global size rounded up to it) traces the same rays as the device's default, and one the
+/// device cannot run is refused in one line, not replaced by the default.
+#[test]
+fn bench_launches_in_the_work_group_asked_for_and_refuses_one_the_device_cannot_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = tiny_scene(dir.path());
+    let device = test_device();
+    let bench = |shape: Option<&str>| {
+        let json_path = dir.path().join("bench.json");
+        let mut cmd = cltrace();
+        cmd.arg("bench")
+            .arg(&scene)
+            .args(["--methods", "cl-bvh", "--layouts", "bin32"])
+            .args(["--rays", "primary,diffuse,path", "--path-spp", "2"])
+            .args([
+                "--resolutions",
+                "32x24",
+                "--warmup",
+                "0",
+                "--repetitions",
+                "1",
+            ])
+            .args(["--devices", &device.index(), "--json"])
+            .arg(&json_path);
+        if let Some(shape) = shape {
+            cmd.args(["--work-group", shape]);
+        }
+        let out = run(cmd);
+        (out, json_path)
+    };
+    let rays = |json_path: &Path| -> Vec<(String, u64)> {
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(json_path).unwrap()).unwrap();
+        json.as_array()
+            .unwrap()
+            .iter()
+            .map(|r| {
+                assert!(r["mrays_per_s"].as_f64().unwrap() > 0.0, "{r}");
+                (
+                    r["ray_kind"].as_str().unwrap().to_string(),
+                    r["rays"].as_u64().unwrap(),
+                )
+            })
+            .collect()
+    };
+    let (out, json_path) = bench(None);
+    succeeded(&out);
+    let default = rays(&json_path);
+    let (out, json_path) = bench(Some("3x5"));
+    succeeded(&out);
+    assert_eq!(rays(&json_path), default);
+
+    let too_large = format!("{0}x{0}", device.max_work_group_size + 1);
+    let (out, _) = bench(Some(&too_large));
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.starts_with(&format!("error: work-group {too_large} does not fit")),
+        "{stderr}"
+    );
+}
+
 /// `cltrace tune` (one repetition, the test device) writes a cache naming a layout and a
 /// work-group for the device, and a render pointed at that cache takes its layout.
 #[test]

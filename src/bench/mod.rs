@@ -206,6 +206,10 @@ pub struct BenchRequest {
     pub brute_budget_s: f64,
     /// How every BVH is built.
     pub build: BuildOptions,
+    /// The OpenCL kernels' work-group shape (pixels across, down; the trace of arbitrary
+    /// rays takes their product), instead of each device's default: what `cltrace tune`
+    /// varies, here measured on every ray kind.
+    pub work_group: Option<[usize; 2]>,
     /// How much goes to stderr: rows as they come with `--verbose`, the progress bar unless
     /// `--quiet`.
     pub verbosity: Verbosity,
@@ -398,6 +402,7 @@ fn run_into(
                                 device,
                                 &mut timings,
                             )
+                            .and_then(|r| with_work_group(r, req.work_group))
                         })
                         .transpose()?;
                     // Path tracing renders as `render --shade path` does: the scene's
@@ -420,6 +425,7 @@ fn run_into(
                                 device,
                                 &mut path_timings,
                             )
+                            .and_then(|r| with_work_group(r, req.work_group))
                         })
                         .transpose()?;
                     for &(width, height) in &req.resolutions {
@@ -478,6 +484,18 @@ fn layouts_for(req: &BenchRequest, method: Method) -> Vec<Layout> {
     } else {
         vec![Layout::Bin32]
     }
+}
+
+/// `renderer` with its kernels launched in work-groups of `shape` where one is asked for
+/// (a shape the device cannot run is an error, not a silent default).
+fn with_work_group<'d>(
+    mut renderer: Renderer<'d>,
+    shape: Option<[usize; 2]>,
+) -> Result<Renderer<'d>> {
+    if let Some(shape) = shape {
+        renderer.set_work_group(shape)?;
+    }
+    Ok(renderer)
 }
 
 /// What one run measures: a scene at one size through one method, layout and device.

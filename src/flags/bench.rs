@@ -13,7 +13,8 @@ use cltrace::report::Verbosity;
 
 use super::build::BuildArgs;
 use super::values::{
-    all_names, choice, device_list, parse_resolution, triangle_count, whole_number,
+    all_names, choice, device_list, parse_resolution, parse_work_group, triangle_count,
+    whole_number,
 };
 
 /// Every method and every layout: the defaults of the lists.
@@ -121,6 +122,12 @@ pub struct BenchArgs {
     #[arg(long, value_name = "TRIANGLES", requires = "scaling", value_parser = triangle_count, default_value = "10M")]
     scaling_to: u64,
 
+    /// Launch the OpenCL kernels in work-groups of this shape, `WxH` pixels (arbitrary rays
+    /// in groups of W*H), instead of each device's default (8x8 on most): what `cltrace
+    /// tune` varies
+    #[arg(long, value_name = "WxH", value_parser = parse_work_group)]
+    work_group: Option<[usize; 2]>,
+
     #[command(flatten)]
     build: BuildArgs,
 
@@ -155,6 +162,7 @@ impl BenchArgs {
                 repetitions: self.repetitions,
                 brute_budget_s: self.brute_budget,
                 build: self.build.options(),
+                work_group: self.work_group,
                 verbosity: Verbosity::from_flags(self.quiet, self.verbose),
             },
             scaling: self.scaling,

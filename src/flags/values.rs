@@ -154,6 +154,17 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
     }
 }
 
+/// A work-group shape `WxH`, each side at least 1 (whether the device can run it is the
+/// device's to say).
+pub fn parse_work_group(s: &str) -> Result<[usize; 2], String> {
+    match parse_resolution(s) {
+        Ok((w, h)) if w > 0 && h > 0 => Ok([w as usize, h as usize]),
+        _ => Err(format!(
+            "`{s}` is not a work-group shape `WxH` of positive sizes"
+        )),
+    }
+}
+
 /// `--devices`: `all` (any case) is `None`, every device; otherwise the comma-separated
 /// selectors, each trimmed.
 pub fn device_list(flag: &str) -> Option<Vec<String>> {
