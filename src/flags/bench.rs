@@ -123,8 +123,8 @@ pub struct BenchArgs {
     scaling_to: u64,
 
     /// Launch the OpenCL kernels in work-groups of this shape, `WxH` pixels (arbitrary rays
-    /// in groups of W*H), instead of each device's default (16x8 on GPUs, else 8x8): what `cltrace
-    /// tune` varies
+    /// in groups of W*H), instead of each device's default (16x8 on GPUs, else 8x8): what
+    /// `cltrace tune` varies
     #[arg(long, value_name = "WxH", value_parser = parse_work_group)]
     work_group: Option<[usize; 2]>,
 

@@ -177,6 +177,15 @@ mod tests {
     use super::*;
 
     #[test]
+    fn work_group_shapes_take_two_positive_sides() {
+        assert_eq!(parse_work_group("16x8"), Ok([16, 8]));
+        assert_eq!(parse_work_group("3X5"), Ok([3, 5]));
+        for bad in ["0x8", "8x0", "8", "8x", "-1x8", "axb"] {
+            assert!(parse_work_group(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
     fn triangle_counts_take_k_m_and_g() {
         assert_eq!(triangle_count("300M"), Ok(300_000_000));
         assert_eq!(triangle_count("2.5G"), Ok(2_500_000_000));
