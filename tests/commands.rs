@@ -571,14 +571,8 @@ fn bench_launches_in_the_work_group_asked_for_and_refuses_one_the_device_cannot_
             .arg(&scene)
             .args(["--methods", "cl-bvh", "--layouts", "bin32"])
             .args(["--rays", "primary,diffuse,path", "--path-spp", "2"])
-            .args([
-                "--resolutions",
-                "32x24",
-                "--warmup",
-                "0",
-                "--repetitions",
-                "1",
-            ])
+            .args(["--resolutions", "32x24"])
+            .args(["--warmup", "0", "--repetitions", "1"])
             .args(["--devices", &device.index(), "--json"])
             .arg(&json_path);
         if let Some(shape) = shape {
