@@ -180,6 +180,15 @@ FORCE_INLINE float3 scatter_from(const Shading* sh, bool lambert, float3 n, floa
 }
 
 #ifdef KERNEL_SAMPLE_PATH
+/* Programs with scattering models whose only lights are emitters trace the emitter
+ * sample's shadow ray in the path loop's next turn instead of inside the vertex
+ * (sample_path). On the H200 that made a glossy and a glass scene 13% and 17% faster, but
+ * a Lambertian one, whose shading state is small, 17% slower: its SIMD groups then shade
+ * in two turns where they shaded in one (docs/bench/2026-12-05-deferred-shadow.md). */
+#if defined(EMITTERS) && defined(BSDFS) && !defined(ENVIRONMENT) && !defined(PUNCTUAL)
+#define DEFERRED_SHADOW
+#endif
+
 /* A path between its vertices: the ray it goes on along (from org along dir), what it has
  * gathered, what its vertices so far pass on, and its sample's stream. */
 typedef struct {
@@ -191,6 +200,13 @@ typedef struct {
      * it: camera rays, delta lobes, light through the surface. */
     float last_pdf;
     uint bounce, count, key;
+#ifdef DEFERRED_SHADOW
+    /* The vertex's emitter sample, whose shadow ray the loop traces next: the light it
+     * adds if nothing blocks it (from shadow_org along shadow_dir, up to shadow_reach). */
+    float3 shadow_org, shadow_dir, shadow_light;
+    float shadow_reach;
+    bool shadow;
+#endif
 } PathState;
 
 /* A path's start: the camera ray of the sample whose stream is key. */
@@ -203,6 +219,9 @@ FORCE_INLINE void path_begin(CAMERA_PARAMS, uint x, uint y, uint key, PathState*
     p->cone = 0.0f;
     p->last_pdf = 0.0f;
     p->bounce = 0;
+#ifdef DEFERRED_SHADOW
+    p->shadow = false;
+#endif
 }
 
 /* The path's vertex at its ray's hit (triangle hit at ray parameter t, or MISS): emission
@@ -284,7 +303,11 @@ FORCE_INLINE bool path_vertex(SCENE_PARAMS, LIGHT_PARAMS, float4 du, float offse
             float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
             if (max3(f) > 0.0f) {
                 p->count += 1;
+#ifdef DEFERRED_SHADOW
+                {
+#else
                 if (!occluded(SCENE, origin, l, sqrt(d2) * (1.0f - 1e-4f))) {
+#endif
                     float su = sqrt(u1);
                     float light_pdf = d2 * emitter_density(materials, e, emitter_power) / cos_there;
 #ifdef MIS
@@ -293,7 +316,16 @@ FORCE_INLINE bool path_vertex(SCENE_PARAMS, LIGHT_PARAMS, float4 du, float offse
 #else
                     float weight = 1.0f;
 #endif
-                    p->radiance += p->throughput * f * emitted(SURFACE, e, 1.0f - su, u2 * su) * (weight / light_pdf);
+                    float3 light = p->throughput * f * emitted(SURFACE, e, 1.0f - su, u2 * su) * (weight / light_pdf);
+#ifdef DEFERRED_SHADOW
+                    p->shadow_org = origin;
+                    p->shadow_dir = l;
+                    p->shadow_reach = sqrt(d2) * (1.0f - 1e-4f);
+                    p->shadow_light = light;
+                    p->shadow = true;
+#else
+                    p->radiance += light;
+#endif
                 }
             }
         }
@@ -379,14 +411,35 @@ __kernel void sample_path(SAMPLE_PARAMS) {
     uint rays_traced = 0;
     uint s = 0;
     PathState p;
+#ifdef DEFERRED_SHADOW
+    bool going_on = false;
+#endif
     path_begin(CAMERA, x, y, sampler_key(seed, y * width + x, sample), &p);
     for (;;) {
         /* One call site for the camera ray and every bounce: each inlined traversal costs
          * compile time, and on the H200 the one site also ran 1.4-4.4% faster
          * (docs/bench/2026-12-04-first-image.md). */
         float t;
+#ifdef DEFERRED_SHADOW
+        /* The emitter sample's shadow ray goes through the same call site, in the turn
+         * after its vertex: no second traversal is inlined, and none runs while the
+         * vertex's shading state is live. Its light is added before the next vertex's, as
+         * the inline test adds it. */
+        bool shadow = p.shadow;
+        uint hit = trace(SCENE, shadow ? p.shadow_org : p.org, shadow ? p.shadow_dir : p.dir,
+                         shadow ? p.shadow_reach : INFINITY, shadow, true, &t);
+        if (shadow) {
+            p.shadow = false;
+            if (hit == MISS) p.radiance += p.shadow_light;
+            if (going_on) continue;
+        } else {
+            going_on = path_vertex(SCENE, LIGHTS, du, offset, max_bounces, hit, t, &p);
+            if (going_on || p.shadow) continue;
+        }
+#else
         uint hit = trace(SCENE, p.org, p.dir, INFINITY, false, true, &t);
         if (path_vertex(SCENE, LIGHTS, du, offset, max_bounces, hit, t, &p)) continue;
+#endif
         /* The path has ended: its sample is summed and, if the launch has more, the next
          * sample's camera ray is where the loop goes on. */
         *pixel_sums += (long4)(fixed3(p.radiance), 0);

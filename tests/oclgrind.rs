@@ -135,6 +135,22 @@ fn every_kernel_runs_clean_under_oclgrind() {
     if !log.trim().is_empty() {
         found.push(format!("{args:?}:\n{log}"));
     }
+    // The same lit by an emitter alone, whose shadow rays the path loop traces in the turn
+    // after their vertex (DEFERRED_SHADOW, cl/integrator.cl).
+    let emitter_lit = dir.path().join("emitter_lit.toml");
+    std::fs::write(
+        &emitter_lit,
+        text.clone()
+            + "[[mesh]]\ngenerator = { kind = \"sphere\", subdivisions = 1 }\n\
+               translate = [0.0, 2.5, 0.0]\nscale = 0.3\nmaterial = { emission = [4.0, 4.0, 4.0] }\n",
+    )
+    .unwrap();
+    let mut emitter_args = args;
+    emitter_args[1] = emitter_lit.to_str().unwrap();
+    let log = checked(&oclgrind, dir.path(), &emitter_args);
+    if !log.trim().is_empty() {
+        found.push(format!("{emitter_args:?}:\n{log}"));
+    }
     // The same under every other light: an environment map (a 4 x 2 Radiance HDR), a
     // point, a spot and a directional light.
     let mut hdr = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 4\n".to_vec();
