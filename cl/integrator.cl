@@ -180,13 +180,8 @@ FORCE_INLINE float3 scatter_from(const Shading* sh, bool lambert, float3 n, floa
 }
 
 #ifdef KERNEL_SAMPLE_PATH
-/* Programs with scattering models whose only lights are emitters trace the emitter
- * sample's shadow ray in the path loop's next turn instead of inside the vertex
- * (sample_path). On the H200 that made a glossy and a glass scene 13% and 17% faster, but
- * a Lambertian one, whose shading state is small, 17% slower: its SIMD groups then shade
- * in two turns where they shaded in one (docs/bench/2026-12-05-deferred-shadow.md). */
-#if defined(EMITTERS) && defined(BSDFS) && !defined(ENVIRONMENT) && !defined(PUNCTUAL)
-#define DEFERRED_SHADOW
+#if defined(DEFERRED_SHADOW) && (defined(ENVIRONMENT) || defined(PUNCTUAL))
+#error "DEFERRED_SHADOW holds one light sample a vertex: the host sets it only where emitters are the only lights"
 #endif
 
 /* A path between its vertices: the ray it goes on along (from org along dir), what it has
@@ -201,8 +196,10 @@ typedef struct {
     float last_pdf;
     uint bounce, count, key;
 #ifdef DEFERRED_SHADOW
-    /* The vertex's emitter sample, whose shadow ray the loop traces next: the light it
-     * adds if nothing blocks it (from shadow_org along shadow_dir, up to shadow_reach). */
+    /* Where the host defines DEFERRED_SHADOW (src/device/program.rs), the vertex's emitter
+     * sample, whose shadow ray the loop traces in its next turn instead of inside the
+     * vertex: the light it adds if nothing blocks it (from shadow_org along shadow_dir, up
+     * to shadow_reach). */
     float3 shadow_org, shadow_dir, shadow_light;
     float shadow_reach;
     bool shadow;

@@ -13,7 +13,7 @@ use std::ffi::CString;
 use ocl::core::ClDeviceIdPtr;
 
 use super::tracer::Kernels;
-use super::{CacheUse, ClDevice, first_line};
+use super::{CacheUse, ClDevice, DeviceKind, first_line};
 use crate::bvh::Layout;
 use crate::error::{Error, Result};
 use crate::material::surface::SurfaceFeatures;
@@ -196,6 +196,42 @@ fn layout_files(layout: Layout) -> Vec<String> {
 /// The defines of a program for a BVH in `layout`, with `stack_size` traversal stack
 /// entries: the layout's own (its file refuses to compile without it), the stack's size,
 /// and for the wide layouts the slots of a node.
+/// The defines that compile what a scene's surfaces and lights need into its programs, and
+/// leave the rest out (cl/surface.cl, cl/bsdf.cl, cl/integrator.cl).
+fn surface_defines(features: SurfaceFeatures, kind: DeviceKind) -> Vec<String> {
+    let mut defines = Vec::new();
+    let mut define = |on: bool, name: &str| {
+        if on {
+            defines.push(name.to_string());
+        }
+    };
+    define(features.masks, "ALPHA_MASKS");
+    define(features.normals, "SHADING_NORMALS");
+    define(features.textures, "TEXTURES");
+    define(features.bsdfs(), "BSDFS");
+    define(
+        features.bsdfs(),
+        &format!("BSDF_MODELS={}u", features.models),
+    );
+    define(features.bsdfs() && features.metallic, "METALLIC");
+    define(features.emitters, "EMITTERS");
+    define(features.environment, "ENVIRONMENT");
+    define(features.punctual, "PUNCTUAL");
+    define(features.bsdfs() || features.environment, "MIS");
+    // The path loop traces an emitter sample's shadow ray in its next turn rather than
+    // inside the vertex: faster wherever measured but in Lambertian scenes on GPUs, whose
+    // SIMD groups then shade in two turns instead of one
+    // (docs/bench/2026-12-05-deferred-shadow.md).
+    define(
+        features.emitters
+            && !features.environment
+            && !features.punctual
+            && (features.bsdfs() || kind != DeviceKind::Gpu),
+        "DEFERRED_SHADOW",
+    );
+    defines
+}
+
 fn layout_defines(layout: Layout, stack_size: u32) -> Vec<String> {
     use crate::bvh::wide::WideNode;
     let mut defines = vec![layout.define(), format!("STACK_SIZE={}", stack_size.max(1))];
@@ -347,34 +383,7 @@ impl ClDevice {
             Some((layout, stack_size)) => layout_defines(layout, stack_size),
             None => Vec::new(),
         };
-        if features.masks {
-            defines.push("ALPHA_MASKS".into());
-        }
-        if features.normals {
-            defines.push("SHADING_NORMALS".into());
-        }
-        if features.textures {
-            defines.push("TEXTURES".into());
-        }
-        if features.bsdfs() {
-            defines.push("BSDFS".into());
-            defines.push(format!("BSDF_MODELS={}u", features.models));
-            if features.metallic {
-                defines.push("METALLIC".into());
-            }
-        }
-        if features.emitters {
-            defines.push("EMITTERS".into());
-        }
-        if features.environment {
-            defines.push("ENVIRONMENT".into());
-        }
-        if features.punctual {
-            defines.push("PUNCTUAL".into());
-        }
-        if features.bsdfs() || features.environment {
-            defines.push("MIS".into());
-        }
+        defines.extend(surface_defines(features, self.info.kind));
         defines.extend(kernels.defines());
         let label = match layout {
             Some(layout) => format!("{} ({})", kernels.names(), layout.name()),
@@ -611,6 +620,48 @@ mod tests {
                     assert!(!text.contains(&define), "{name} mentions {define}");
                 }
             }
+        }
+    }
+
+    /// The path loop defers the shadow ray only where a vertex takes one light sample
+    /// (emitters alone), and on GPUs only in scenes with scattering models: Lambertian
+    /// ones ran slower there.
+    #[test]
+    fn shadow_rays_are_deferred_where_emitters_are_the_only_lights_and_it_was_faster() {
+        use crate::material::Bsdf;
+        let emitters = SurfaceFeatures {
+            emitters: true,
+            models: 1 << Bsdf::Diffuse.code(),
+            ..SurfaceFeatures::default()
+        };
+        let glossy = SurfaceFeatures {
+            models: emitters.models | 1 << Bsdf::Conductor.code(),
+            ..emitters
+        };
+        assert!(glossy.bsdfs() && !emitters.bsdfs());
+        let deferred = |f, kind| surface_defines(f, kind).contains(&"DEFERRED_SHADOW".into());
+        for kind in [DeviceKind::Gpu, DeviceKind::Cpu, DeviceKind::Other] {
+            assert!(deferred(glossy, kind), "{kind:?}");
+            assert_eq!(
+                deferred(emitters, kind),
+                kind != DeviceKind::Gpu,
+                "{kind:?}"
+            );
+            for lit in [glossy, emitters] {
+                let env = SurfaceFeatures {
+                    environment: true,
+                    ..lit
+                };
+                let punctual = SurfaceFeatures {
+                    punctual: true,
+                    ..lit
+                };
+                assert!(
+                    !deferred(env, kind) && !deferred(punctual, kind),
+                    "{kind:?}"
+                );
+            }
+            assert!(!deferred(SurfaceFeatures::default(), kind));
         }
     }
 
