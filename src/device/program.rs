@@ -193,9 +193,6 @@ fn layout_files(layout: Layout) -> Vec<String> {
     }
 }
 
-/// The defines of a program for a BVH in `layout`, with `stack_size` traversal stack
-/// entries: the layout's own (its file refuses to compile without it), the stack's size,
-/// and for the wide layouts the slots of a node.
 /// The defines that compile what a scene's surfaces and lights need into its programs, and
 /// leave the rest out (cl/surface.cl, cl/bsdf.cl, cl/integrator.cl).
 fn surface_defines(features: SurfaceFeatures, kind: DeviceKind) -> Vec<String> {
@@ -219,19 +216,22 @@ fn surface_defines(features: SurfaceFeatures, kind: DeviceKind) -> Vec<String> {
     define(features.punctual, "PUNCTUAL");
     define(features.bsdfs() || features.environment, "MIS");
     // The path loop traces an emitter sample's shadow ray in its next turn rather than
-    // inside the vertex: faster wherever measured but in Lambertian scenes on GPUs, whose
-    // SIMD groups then shade in two turns instead of one
-    // (docs/bench/2026-12-05-deferred-shadow.md).
+    // inside the vertex: faster on the H200 with scattering models and on CPUs in every
+    // scene, slower on the H200 in Lambertian ones, whose SIMD groups then shade in two
+    // turns instead of one (docs/bench/2026-12-05-deferred-shadow.md).
     define(
         features.emitters
             && !features.environment
             && !features.punctual
-            && (features.bsdfs() || kind != DeviceKind::Gpu),
+            && (features.bsdfs() || kind == DeviceKind::Cpu),
         "DEFERRED_SHADOW",
     );
     defines
 }
 
+/// The defines of a program for a BVH in `layout`, with `stack_size` traversal stack
+/// entries: the layout's own (its file refuses to compile without it), the stack's size,
+/// and for the wide layouts the slots of a node.
 fn layout_defines(layout: Layout, stack_size: u32) -> Vec<String> {
     use crate::bvh::wide::WideNode;
     let mut defines = vec![layout.define(), format!("STACK_SIZE={}", stack_size.max(1))];
@@ -624,8 +624,7 @@ mod tests {
     }
 
     /// The path loop defers the shadow ray only where a vertex takes one light sample
-    /// (emitters alone), and on GPUs only in scenes with scattering models: Lambertian
-    /// ones ran slower there.
+    /// (emitters alone), and in Lambertian scenes only on CPUs: they ran slower on a GPU.
     #[test]
     fn shadow_rays_are_deferred_where_emitters_are_the_only_lights_and_it_was_faster() {
         use crate::material::Bsdf;
@@ -644,7 +643,7 @@ mod tests {
             assert!(deferred(glossy, kind), "{kind:?}");
             assert_eq!(
                 deferred(emitters, kind),
-                kind != DeviceKind::Gpu,
+                kind == DeviceKind::Cpu,
                 "{kind:?}"
             );
             for lit in [glossy, emitters] {
