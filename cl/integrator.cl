@@ -300,10 +300,11 @@ FORCE_INLINE bool path_vertex(SCENE_PARAMS, LIGHT_PARAMS, float4 du, float offse
             float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
             if (max3(f) > 0.0f) {
                 p->count += 1;
+                float reach = sqrt(d2) * (1.0f - 1e-4f);
 #ifdef DEFERRED_SHADOW
                 {
 #else
-                if (!occluded(SCENE, origin, l, sqrt(d2) * (1.0f - 1e-4f))) {
+                if (!occluded(SCENE, origin, l, reach)) {
 #endif
                     float su = sqrt(u1);
                     float light_pdf = d2 * emitter_density(materials, e, emitter_power) / cos_there;
@@ -317,7 +318,7 @@ FORCE_INLINE bool path_vertex(SCENE_PARAMS, LIGHT_PARAMS, float4 du, float offse
 #ifdef DEFERRED_SHADOW
                     p->shadow_org = origin;
                     p->shadow_dir = l;
-                    p->shadow_reach = sqrt(d2) * (1.0f - 1e-4f);
+                    p->shadow_reach = reach;
                     p->shadow_light = light;
                     p->shadow = true;
 #else

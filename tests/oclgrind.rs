@@ -64,16 +64,20 @@ fn every_kernel_runs_clean_under_oclgrind() {
         programs.push(vec!["--method", "cl-bvh", "--layout", layout]);
     }
     let mut found = Vec::new();
+    // Runs cltrace with `args` under Oclgrind, keeping any diagnostics.
+    let mut check = |args: &[&str]| {
+        let log = checked(&oclgrind, dir.path(), args);
+        if !log.trim().is_empty() {
+            found.push(format!("{args:?}:\n{log}"));
+        }
+    };
     for program in &programs {
         for shade in ["lambert", "ao", "shadow", "path"] {
             let mut args = vec!["render", scene, "-q", "-o", png];
             args.extend(["--width", "8", "--height", "6", "--spp", "2"]);
             args.extend(["--shade", shade]);
             args.extend(program.iter().copied());
-            let log = checked(&oclgrind, dir.path(), &args);
-            if !log.trim().is_empty() {
-                found.push(format!("{args:?}:\n{log}"));
-            }
+            check(&args);
         }
     }
     // trace_primary_general: an orthographic camera, with barycentric hit records.
@@ -91,10 +95,7 @@ fn every_kernel_runs_clean_under_oclgrind() {
     args.push(hits.to_str().unwrap());
     for program in &programs[..2] {
         let args = [&args[..], program].concat();
-        let log = checked(&oclgrind, dir.path(), &args);
-        if !log.trim().is_empty() {
-            found.push(format!("{args:?}:\n{log}"));
-        }
+        check(&args);
     }
     // Every scattering model in the path tracer, under the sky.
     let materials = dir.path().join("materials.toml");
@@ -131,10 +132,7 @@ fn every_kernel_runs_clean_under_oclgrind() {
         "--shade",
         "path",
     ];
-    let log = checked(&oclgrind, dir.path(), &args);
-    if !log.trim().is_empty() {
-        found.push(format!("{args:?}:\n{log}"));
-    }
+    check(&args);
     // The same lit by an emitter alone, whose shadow rays the path loop traces in the turn
     // after their vertex (DEFERRED_SHADOW, cl/integrator.cl).
     let emitter_lit = dir.path().join("emitter_lit.toml");
@@ -147,10 +145,7 @@ fn every_kernel_runs_clean_under_oclgrind() {
     .unwrap();
     let mut emitter_args = args;
     emitter_args[1] = emitter_lit.to_str().unwrap();
-    let log = checked(&oclgrind, dir.path(), &emitter_args);
-    if !log.trim().is_empty() {
-        found.push(format!("{emitter_args:?}:\n{log}"));
-    }
+    check(&emitter_args);
     // The same under every other light: an environment map (a 4 x 2 Radiance HDR), a
     // point, a spot and a directional light.
     let mut hdr = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 4\n".to_vec();
@@ -166,10 +161,7 @@ fn every_kernel_runs_clean_under_oclgrind() {
     std::fs::write(&lit, text).unwrap();
     let mut args = args;
     args[1] = lit.to_str().unwrap();
-    let log = checked(&oclgrind, dir.path(), &args);
-    if !log.trim().is_empty() {
-        found.push(format!("{args:?}:\n{log}"));
-    }
+    check(&args);
     // The ray-buffer kernel: the bench's diffuse rays.
     let args = [
         "bench",
@@ -188,10 +180,7 @@ fn every_kernel_runs_clean_under_oclgrind() {
         "--repetitions",
         "1",
     ];
-    let log = checked(&oclgrind, dir.path(), &args);
-    if !log.trim().is_empty() {
-        found.push(format!("{args:?}:\n{log}"));
-    }
+    check(&args);
     assert!(
         found.is_empty(),
         "Oclgrind's diagnostics:\n{}",
