@@ -16,7 +16,7 @@
 //! nodes, shifting child indices. Memory is touched once per node: on a virtual machine a
 //! fresh page costs microseconds, so untouched slack is worth more than it seems.
 
-use glam::{BVec4A, IVec4, Vec3A, Vec4};
+use glam::{BVec4A, UVec4, Vec3A, Vec4};
 use rayon::prelude::*;
 
 use super::{BuildOptions, Builder, Bvh, INTERSECTION_COST, TRAVERSAL_COST};
@@ -607,10 +607,10 @@ struct BinTable {
     bins: usize,
     boxes: Box<[[Aabb; MAX_BINS]; 3]>,
     /// Per bin, its count on each axis (lanes x, y, z).
-    counts: Box<[IVec4; MAX_BINS]>,
+    counts: Box<[UVec4; MAX_BINS]>,
     /// A second set of bins for every other triangle (see [`BinTable::add`]).
     odd_boxes: Box<[[Aabb; MAX_BINS]; 3]>,
-    odd_counts: Box<[IVec4; MAX_BINS]>,
+    odd_counts: Box<[UVec4; MAX_BINS]>,
     /// Sweep workspace: half-area of the bins right of each plane, per axis (lanes x, y, z).
     right_area: Box<[Vec4; MAX_BINS]>,
 }
@@ -620,9 +620,9 @@ impl BinTable {
         let mut t = BinTable {
             bins,
             boxes: Box::new([[Aabb::EMPTY; MAX_BINS]; 3]),
-            counts: Box::new([IVec4::ZERO; MAX_BINS]),
+            counts: Box::new([UVec4::ZERO; MAX_BINS]),
             odd_boxes: Box::new([[Aabb::EMPTY; MAX_BINS]; 3]),
-            odd_counts: Box::new([IVec4::ZERO; MAX_BINS]),
+            odd_counts: Box::new([UVec4::ZERO; MAX_BINS]),
             right_area: Box::new([Vec4::ZERO; MAX_BINS]),
         };
         t.reset(bins);
@@ -632,8 +632,8 @@ impl BinTable {
     /// Empties the first `bins` bins of each axis and uses only those.
     fn reset(&mut self, bins: usize) {
         self.bins = bins;
-        self.counts[..bins].fill(IVec4::ZERO);
-        self.odd_counts[..bins].fill(IVec4::ZERO);
+        self.counts[..bins].fill(UVec4::ZERO);
+        self.odd_counts[..bins].fill(UVec4::ZERO);
         for axis in 0..3 {
             self.boxes[axis][..bins].fill(Aabb::EMPTY);
             self.odd_boxes[axis][..bins].fill(Aabb::EMPTY);
@@ -649,7 +649,7 @@ impl BinTable {
         #[inline(always)]
         fn put(
             boxes: &mut [[Aabb; MAX_BINS]; 3],
-            counts: &mut [IVec4; MAX_BINS],
+            counts: &mut [UVec4; MAX_BINS],
             p: &Prim,
             k: [u32; 3],
         ) {
@@ -721,9 +721,9 @@ impl BinTable {
             self.right_area[k] = half_areas(&acc);
         }
         // Left to right: price each plane.
-        let total = IVec4::splat(n as i32);
+        let total = UVec4::splat(n as u32);
         let mut left = [Aabb::EMPTY; 3];
-        let mut left_count = IVec4::ZERO;
+        let mut left_count = UVec4::ZERO;
         // Per axis, the first plane with triangles on both sides, then any cheaper one (as a
         // loop over the axes' planes in order would keep them); bin 0 marks none yet.
         let (mut best_cost, mut best_bin) = (Vec4::ZERO, Vec4::ZERO);
@@ -1041,7 +1041,7 @@ mod tests {
     /// both sides, then only a strictly cheaper one, later axes only if strictly cheaper.
     fn cheapest_plane_axis_by_axis(t: &BinTable, usable: BVec4A) -> Option<(f32, usize, usize)> {
         let mut best: Option<(f32, usize, usize)> = None;
-        let total: i32 = t.counts[..t.bins].iter().map(|c| c.x).sum();
+        let total: u32 = t.counts[..t.bins].iter().map(|c| c.x).sum();
         for axis in (0..3).filter(|&a| usable.test(a)) {
             for k in 1..t.bins {
                 let left = t.boxes[axis][..k]
@@ -1050,7 +1050,7 @@ mod tests {
                 let right = t.boxes[axis][k..]
                     .iter()
                     .fold(Aabb::EMPTY, |a, b| a.union(*b));
-                let lc: i32 = t.counts[..k].iter().map(|c| c[axis]).sum();
+                let lc: u32 = t.counts[..k].iter().map(|c| c[axis]).sum();
                 let rc = total - lc;
                 if lc == 0 || rc == 0 {
                     continue;
@@ -1077,7 +1077,7 @@ mod tests {
             let bins = 2 + next(31) as usize;
             let mut t = BinTable::new(bins);
             // Few distinct coordinates and counts, so that equal costs and empty bins occur.
-            let n = 1 + next(40) as i32;
+            let n = 1 + next(40) as u32;
             for _ in 0..n {
                 let a = Vec3A::from([0, 1, 2].map(|_| next(4) as f32));
                 let b = Vec3A::from([0, 1, 2].map(|_| next(4) as f32));
