@@ -200,14 +200,16 @@ impl Scratch {
 pub(super) fn build(mesh: &Mesh, options: &BuildOptions) -> Bvh {
     let n = mesh.triangle_count();
     assert!(n > 0, "a checked mesh has triangles");
+    // From the index and position arrays directly: through `Mesh::corners` (inlined or
+    // not) the dragon's records took 9 ms instead of 3.4.
     let positions = &mesh.positions;
     let mut records: Vec<Prim> = mesh
         .triangles
         .par_iter()
         .enumerate()
         .with_min_len(4096)
-        .map(|(i, &[a, b, c])| {
-            let [a, b, c] = [a, b, c].map(|v| Vec3A::from(positions[v as usize]));
+        .map(|(i, corners)| {
+            let [a, b, c] = corners.map(|v| Vec3A::from(positions[v as usize]));
             let bounds = Bounds {
                 min: a.min(b).min(c),
                 max: a.max(b).max(c),
