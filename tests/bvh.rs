@@ -112,17 +112,18 @@ fn a_million_triangles_in_one_point_build_and_never_hit() {
 #[test]
 fn depth_stays_bounded_where_the_sah_would_chain() {
     // Triangles sharing a corner, each 1.45 times larger than the last: the SAH peels off
-    // the largest again and again, a tree far deeper than it is wide: depth 20 or more where
-    // a balanced tree needs 7. Under tighter limits the builder must switch to median splits
+    // the largest again and again, a tree far deeper than it is wide: depth 19 or more where
+    // a balanced tree needs 7 (11 with two bins, whose grid's one plane often has every
+    // centroid on one side). Under tighter limits the builder must switch to median splits
     // in time, and at the limit itself make leaves whatever their size.
     let (mesh, rays) = (chain(), chain_rays());
     for opts in all_options() {
         let natural = Bvh::build(&mesh, &opts).depth;
         assert!(
-            natural >= 20,
-            "{opts:?}: natural depth {natural} does not test the limit"
+            natural > 8,
+            "{opts:?}: natural depth {natural} does not test the limits"
         );
-        for max_depth in [16, 8, 2] {
+        for max_depth in [16, 8, 2].into_iter().filter(|&d| d < natural) {
             let limited = BuildOptions { max_depth, ..opts };
             let bvh = Bvh::build(&mesh, &limited);
             assert!(bvh.depth <= max_depth, "{limited:?}: depth {}", bvh.depth);
