@@ -180,8 +180,26 @@ FORCE_INLINE float3 scatter_from(const Shading* sh, bool lambert, float3 n, floa
 }
 
 #ifdef KERNEL_SAMPLE_PATH
-#if defined(DEFERRED_SHADOW) && (defined(ENVIRONMENT) || defined(PUNCTUAL))
-#error "DEFERRED_SHADOW holds one light sample a vertex: the host sets it only where emitters are the only lights"
+/* A light sample of the vertex: `light` reaches it unless something blocks the shadow ray
+ * from `from` along unit `towards` before `reach`. Where the host defines DEFERRED_SHADOW
+ * (src/device/program.rs: a vertex takes at most one light sample), the shadow ray waits
+ * in the path's state for the loop's next turn (sample_path); elsewhere it is traced
+ * here. */
+#ifdef DEFERRED_SHADOW
+#if defined(ENVIRONMENT) && defined(EMITTERS) || defined(PUNCTUAL)
+#error "DEFERRED_SHADOW holds one light sample a vertex: emitters or an environment, not both, no punctual lights"
+#endif
+#define SHADOW_RAY(from, towards, reach, light)                          \
+    {                                                                    \
+        p->shadow_org = (from);                                          \
+        p->shadow_dir = (towards);                                       \
+        p->shadow_reach = (reach);                                       \
+        p->shadow_light = (light);                                       \
+        p->shadow = true;                                                \
+    }
+#else
+#define SHADOW_RAY(from, towards, reach, light)                          \
+    if (!occluded(SCENE, from, towards, reach)) p->radiance += (light);
 #endif
 
 /* A path between its vertices: the ray it goes on along (from org along dir), what it has
@@ -196,10 +214,7 @@ typedef struct {
     float last_pdf;
     uint bounce, count, key;
 #ifdef DEFERRED_SHADOW
-    /* Where the host defines DEFERRED_SHADOW (src/device/program.rs), the vertex's emitter
-     * sample, whose shadow ray the loop traces in its next turn instead of inside the
-     * vertex: the light it adds if nothing blocks it (from shadow_org along shadow_dir, up
-     * to shadow_reach). */
+    /* The vertex's light sample, whose shadow ray the loop traces next (SHADOW_RAY). */
     float3 shadow_org, shadow_dir, shadow_light;
     float shadow_reach;
     bool shadow;
@@ -300,31 +315,16 @@ FORCE_INLINE bool path_vertex(SCENE_PARAMS, LIGHT_PARAMS, float4 du, float offse
             float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
             if (max3(f) > 0.0f) {
                 p->count += 1;
-                float reach = sqrt(d2) * (1.0f - 1e-4f);
-#ifdef DEFERRED_SHADOW
-                {
-#else
-                if (!occluded(SCENE, origin, l, reach)) {
-#endif
-                    float su = sqrt(u1);
-                    float light_pdf = d2 * emitter_density(materials, e, emitter_power) / cos_there;
+                float su = sqrt(u1);
+                float light_pdf = d2 * emitter_density(materials, e, emitter_power) / cos_there;
 #ifdef MIS
-                    float r = bsdf_pdf / light_pdf;
-                    float weight = 1.0f / (1.0f + r * r);
+                float r = bsdf_pdf / light_pdf;
+                float weight = 1.0f / (1.0f + r * r);
 #else
-                    float weight = 1.0f;
+                float weight = 1.0f;
 #endif
-                    float3 light = p->throughput * f * emitted(SURFACE, e, 1.0f - su, u2 * su) * (weight / light_pdf);
-#ifdef DEFERRED_SHADOW
-                    p->shadow_org = origin;
-                    p->shadow_dir = l;
-                    p->shadow_reach = reach;
-                    p->shadow_light = light;
-                    p->shadow = true;
-#else
-                    p->radiance += light;
-#endif
-                }
+                SHADOW_RAY(origin, l, sqrt(d2) * (1.0f - 1e-4f),
+                           p->throughput * f * emitted(SURFACE, e, 1.0f - su, u2 * su) * (weight / light_pdf))
             }
         }
     }
@@ -339,10 +339,8 @@ FORCE_INLINE bool path_vertex(SCENE_PARAMS, LIGHT_PARAMS, float4 du, float offse
             float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
             if (max3(f) > 0.0f) {
                 p->count += 1;
-                if (!occluded(SCENE, origin, l, INFINITY)) {
-                    float r = bsdf_pdf / env_pdf;
-                    p->radiance += p->throughput * f * le * (1.0f / (1.0f + r * r) / env_pdf);
-                }
+                float r = bsdf_pdf / env_pdf;
+                SHADOW_RAY(origin, l, INFINITY, p->throughput * f * le * (1.0f / (1.0f + r * r) / env_pdf))
             }
         }
     }
@@ -358,7 +356,7 @@ FORCE_INLINE bool path_vertex(SCENE_PARAMS, LIGHT_PARAMS, float4 du, float offse
             float3 f = scatter_from(&sh, lambert, n, tn, bn, wo_l, l, &bsdf_pdf);
             if (max3(f) > 0.0f) {
                 p->count += 1;
-                if (!occluded(SCENE, origin, l, reach * (1.0f - 1e-4f))) p->radiance += p->throughput * f * e;
+                SHADOW_RAY(origin, l, reach * (1.0f - 1e-4f), p->throughput * f * e)
             }
         }
     }
@@ -410,7 +408,7 @@ __kernel void sample_path(SAMPLE_PARAMS) {
     uint s = 0;
     PathState p;
 #ifdef DEFERRED_SHADOW
-    bool going_on = false;
+    bool going_on = false, shadow_turn = false;
 #endif
     path_begin(CAMERA, x, y, sampler_key(seed, y * width + x, sample), &p);
     for (;;) {
@@ -419,21 +417,25 @@ __kernel void sample_path(SAMPLE_PARAMS) {
          * (docs/bench/2026-12-04-first-image.md). */
         float t;
 #ifdef DEFERRED_SHADOW
-        /* The emitter sample's shadow ray goes through the same call site, in the turn
+        /* The light sample's shadow ray goes through the same call site, in the turn
          * after its vertex: no second traversal is inlined, and none runs while the
          * vertex's shading state is live. Its light is added before the next vertex's, as
-         * the inline test adds it. */
-        bool shadow = p.shadow;
-        uint hit = trace(SCENE, shadow ? p.shadow_org : p.org, shadow ? p.shadow_dir : p.dir,
-                         shadow ? p.shadow_reach : INFINITY, shadow, true, &t);
-        if (shadow) {
-            p.shadow = false;
-            if (hit == MISS) p.radiance += p.shadow_light;
-            if (going_on) continue;
-        } else {
-            going_on = path_vertex(SCENE, LIGHTS, du, offset, max_bounces, hit, t, &p);
-            if (going_on || p.shadow) continue;
+         * an inline test would. Every vertex is followed by a shadow turn, with or without
+         * a ray, so that the work-items of a SIMD group keep shading in the same turns. */
+        uint hit = MISS;
+        if (!shadow_turn || p.shadow) {
+            hit = trace(SCENE, shadow_turn ? p.shadow_org : p.org, shadow_turn ? p.shadow_dir : p.dir,
+                        shadow_turn ? p.shadow_reach : INFINITY, shadow_turn, true, &t);
         }
+        if (!shadow_turn) {
+            going_on = path_vertex(SCENE, LIGHTS, du, offset, max_bounces, hit, t, &p);
+            shadow_turn = true;
+            continue;
+        }
+        shadow_turn = false;
+        if (p.shadow && hit == MISS) p.radiance += p.shadow_light;
+        p.shadow = false;
+        if (going_on) continue;
 #else
         uint hit = trace(SCENE, p.org, p.dir, INFINITY, false, true, &t);
         if (path_vertex(SCENE, LIGHTS, du, offset, max_bounces, hit, t, &p)) continue;

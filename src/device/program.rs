@@ -13,7 +13,7 @@ use std::ffi::CString;
 use ocl::core::ClDeviceIdPtr;
 
 use super::tracer::Kernels;
-use super::{CacheUse, ClDevice, DeviceKind, first_line};
+use super::{CacheUse, ClDevice, first_line};
 use crate::bvh::Layout;
 use crate::error::{Error, Result};
 use crate::material::surface::SurfaceFeatures;
@@ -195,7 +195,7 @@ fn layout_files(layout: Layout) -> Vec<String> {
 
 /// The defines that compile what a scene's surfaces and lights need into its programs, and
 /// leave the rest out (cl/surface.cl, cl/bsdf.cl, cl/integrator.cl).
-fn surface_defines(features: SurfaceFeatures, kind: DeviceKind) -> Vec<String> {
+fn surface_defines(features: SurfaceFeatures) -> Vec<String> {
     let mut defines = Vec::new();
     let mut define = |on: bool, name: &str| {
         if on {
@@ -215,15 +215,11 @@ fn surface_defines(features: SurfaceFeatures, kind: DeviceKind) -> Vec<String> {
     define(features.environment, "ENVIRONMENT");
     define(features.punctual, "PUNCTUAL");
     define(features.bsdfs() || features.environment, "MIS");
-    // The path loop traces an emitter sample's shadow ray in its next turn rather than
-    // inside the vertex: faster on the H200 with scattering models and on CPUs in every
-    // scene, slower on the H200 in Lambertian ones, whose SIMD groups then shade in two
-    // turns instead of one (docs/bench/2026-12-05-deferred-shadow.md).
+    // The path loop traces a vertex's one light sample's shadow ray in its own turn
+    // rather than inside the vertex (cl/integrator.cl; measured on the H200 and on CPUs:
+    // docs/bench/2026-12-05-deferred-shadow.md).
     define(
-        features.emitters
-            && !features.environment
-            && !features.punctual
-            && (features.bsdfs() || kind == DeviceKind::Cpu),
+        features.emitters != features.environment && !features.punctual,
         "DEFERRED_SHADOW",
     );
     defines
@@ -383,7 +379,7 @@ impl ClDevice {
             Some((layout, stack_size)) => layout_defines(layout, stack_size),
             None => Vec::new(),
         };
-        defines.extend(surface_defines(features, self.info.kind));
+        defines.extend(surface_defines(features));
         defines.extend(kernels.defines());
         let label = match layout {
             Some(layout) => format!("{} ({})", kernels.names(), layout.name()),
@@ -623,45 +619,20 @@ mod tests {
         }
     }
 
-    /// The path loop defers the shadow ray only where a vertex takes one light sample
-    /// (emitters alone), and in Lambertian scenes only on CPUs: they ran slower on a GPU.
+    /// The path loop defers the shadow ray only where a vertex takes one light sample:
+    /// emitters or an environment, not both, and no punctual lights.
     #[test]
-    fn shadow_rays_are_deferred_where_emitters_are_the_only_lights_and_it_was_faster() {
-        use crate::material::Bsdf;
-        let emitters = SurfaceFeatures {
-            emitters: true,
-            models: 1 << Bsdf::Diffuse.code(),
+    fn shadow_rays_are_deferred_where_a_vertex_takes_one_light_sample() {
+        let one = |emitters, environment, punctual| SurfaceFeatures {
+            emitters,
+            environment,
+            punctual,
             ..SurfaceFeatures::default()
         };
-        let glossy = SurfaceFeatures {
-            models: emitters.models | 1 << Bsdf::Conductor.code(),
-            ..emitters
-        };
-        assert!(glossy.bsdfs() && !emitters.bsdfs());
-        let deferred = |f, kind| surface_defines(f, kind).contains(&"DEFERRED_SHADOW".into());
-        for kind in [DeviceKind::Gpu, DeviceKind::Cpu, DeviceKind::Other] {
-            assert!(deferred(glossy, kind), "{kind:?}");
-            assert_eq!(
-                deferred(emitters, kind),
-                kind == DeviceKind::Cpu,
-                "{kind:?}"
-            );
-            for lit in [glossy, emitters] {
-                let env = SurfaceFeatures {
-                    environment: true,
-                    ..lit
-                };
-                let punctual = SurfaceFeatures {
-                    punctual: true,
-                    ..lit
-                };
-                assert!(
-                    !deferred(env, kind) && !deferred(punctual, kind),
-                    "{kind:?}"
-                );
-            }
-            assert!(!deferred(SurfaceFeatures::default(), kind));
-        }
+        let deferred = |f| surface_defines(f).contains(&"DEFERRED_SHADOW".into());
+        assert!(deferred(one(true, false, false)) && deferred(one(false, true, false)));
+        assert!(!deferred(one(true, true, false)) && !deferred(one(false, false, false)));
+        assert!(!deferred(one(true, false, true)) && !deferred(one(false, true, true)));
     }
 
     /// The shared constants are defined by the host alone: no kernel file defines one of
