@@ -420,8 +420,7 @@ __kernel void sample_path(SAMPLE_PARAMS) {
         /* The light sample's shadow ray goes through the same call site, in the turn
          * after its vertex: no second traversal is inlined, and none runs while the
          * vertex's shading state is live. Its light is added before the next vertex's, as
-         * an inline test would. Every vertex is followed by a shadow turn, with or without
-         * a ray, so that the work-items of a SIMD group keep shading in the same turns. */
+         * an inline test would. */
         uint hit = MISS;
         if (!shadow_turn || p.shadow) {
             hit = trace(SCENE, shadow_turn ? p.shadow_org : p.org, shadow_turn ? p.shadow_dir : p.dir,
@@ -429,13 +428,22 @@ __kernel void sample_path(SAMPLE_PARAMS) {
         }
         if (!shadow_turn) {
             going_on = path_vertex(SCENE, LIGHTS, du, offset, max_bounces, hit, t, &p);
+#ifdef LOCKSTEP_SHADOW
+            /* Where the host defines it (SIMD devices), every vertex is followed by a
+             * shadow turn, with or without a ray, so that the work-items of a SIMD group
+             * keep shading in the same turns; a CPU's work-items run one at a time and skip
+             * the empty turns. */
             shadow_turn = true;
-            continue;
+#else
+            shadow_turn = p.shadow;
+#endif
+            if (shadow_turn || going_on) continue;
+        } else {
+            shadow_turn = false;
+            if (p.shadow && hit == MISS) p.radiance += p.shadow_light;
+            p.shadow = false;
+            if (going_on) continue;
         }
-        shadow_turn = false;
-        if (p.shadow && hit == MISS) p.radiance += p.shadow_light;
-        p.shadow = false;
-        if (going_on) continue;
 #else
         uint hit = trace(SCENE, p.org, p.dir, INFINITY, false, true, &t);
         if (path_vertex(SCENE, LIGHTS, du, offset, max_bounces, hit, t, &p)) continue;

@@ -13,7 +13,7 @@ use std::ffi::CString;
 use ocl::core::ClDeviceIdPtr;
 
 use super::tracer::Kernels;
-use super::{CacheUse, ClDevice, first_line};
+use super::{CacheUse, ClDevice, DeviceKind, first_line};
 use crate::bvh::Layout;
 use crate::error::{Error, Result};
 use crate::material::surface::SurfaceFeatures;
@@ -195,7 +195,7 @@ fn layout_files(layout: Layout) -> Vec<String> {
 
 /// The defines that compile what a scene's surfaces and lights need into its programs, and
 /// leave the rest out (cl/surface.cl, cl/bsdf.cl, cl/integrator.cl).
-fn surface_defines(features: SurfaceFeatures) -> Vec<String> {
+fn surface_defines(features: SurfaceFeatures, kind: DeviceKind) -> Vec<String> {
     let mut defines = Vec::new();
     let mut define = |on: bool, name: &str| {
         if on {
@@ -216,12 +216,12 @@ fn surface_defines(features: SurfaceFeatures) -> Vec<String> {
     define(features.punctual, "PUNCTUAL");
     define(features.bsdfs() || features.environment, "MIS");
     // The path loop traces a vertex's one light sample's shadow ray in its own turn
-    // rather than inside the vertex (cl/integrator.cl; measured on the H200 and on CPUs:
-    // docs/bench/2026-12-05-deferred-shadow.md).
-    define(
-        features.emitters != features.environment && !features.punctual,
-        "DEFERRED_SHADOW",
-    );
+    // rather than inside the vertex (cl/integrator.cl), on SIMD devices in a turn after
+    // every vertex, with or without a ray; CPUs skip the empty turns, which cost them 2-3%
+    // (docs/bench/2026-12-05-deferred-shadow.md, docs/bench/2026-12-05-gpu-division.md).
+    let deferred = features.emitters != features.environment && !features.punctual;
+    define(deferred, "DEFERRED_SHADOW");
+    define(deferred && kind != DeviceKind::Cpu, "LOCKSTEP_SHADOW");
     defines
 }
 
@@ -379,7 +379,7 @@ impl ClDevice {
             Some((layout, stack_size)) => layout_defines(layout, stack_size),
             None => Vec::new(),
         };
-        defines.extend(surface_defines(features));
+        defines.extend(surface_defines(features, self.info.kind));
         defines.extend(kernels.defines());
         let label = match layout {
             Some(layout) => format!("{} ({})", kernels.names(), layout.name()),
@@ -620,7 +620,8 @@ mod tests {
     }
 
     /// The path loop defers the shadow ray only where a vertex takes one light sample:
-    /// emitters or an environment, not both, and no punctual lights.
+    /// emitters or an environment, not both, and no punctual lights; in lockstep turns on
+    /// every device but CPUs.
     #[test]
     fn shadow_rays_are_deferred_where_a_vertex_takes_one_light_sample() {
         let one = |emitters, environment, punctual| SurfaceFeatures {
@@ -629,10 +630,22 @@ mod tests {
             punctual,
             ..SurfaceFeatures::default()
         };
-        let deferred = |f| surface_defines(f).contains(&"DEFERRED_SHADOW".into());
-        assert!(deferred(one(true, false, false)) && deferred(one(false, true, false)));
-        assert!(!deferred(one(true, true, false)) && !deferred(one(false, false, false)));
-        assert!(!deferred(one(true, false, true)) && !deferred(one(false, true, true)));
+        for kind in [DeviceKind::Gpu, DeviceKind::Cpu, DeviceKind::Other] {
+            let has = |f, name: &str| surface_defines(f, kind).contains(&name.into());
+            let deferred = |f| has(f, "DEFERRED_SHADOW");
+            assert!(deferred(one(true, false, false)) && deferred(one(false, true, false)));
+            assert!(!deferred(one(true, true, false)) && !deferred(one(false, false, false)));
+            assert!(!deferred(one(true, false, true)) && !deferred(one(false, true, true)));
+            // Every vertex gets its shadow turn on SIMD devices; CPUs skip empty turns.
+            for f in [one(true, false, false), one(false, true, false)] {
+                assert_eq!(
+                    has(f, "LOCKSTEP_SHADOW"),
+                    kind != DeviceKind::Cpu,
+                    "{kind:?}"
+                );
+            }
+            assert!(!has(one(true, true, false), "LOCKSTEP_SHADOW"));
+        }
     }
 
     /// The shared constants are defined by the host alone: no kernel file defines one of
