@@ -217,7 +217,7 @@ fn surface_defines(features: SurfaceFeatures, kind: DeviceKind) -> Vec<String> {
     define(features.bsdfs() || features.environment, "MIS");
     // The path loop traces a vertex's one light sample's shadow ray in its own turn
     // rather than inside the vertex (cl/integrator.cl), on SIMD devices in a turn after
-    // every vertex, with or without a ray; CPUs skip the empty turns, which cost them 2-3%
+    // every vertex, with or without a ray; CPUs skip the empty turns, which cost them 2-4%
     // (docs/bench/2026-12-05-deferred-shadow.md, docs/bench/2026-12-05-gpu-division.md).
     let deferred = features.emitters != features.environment && !features.punctual;
     define(deferred, "DEFERRED_SHADOW");
