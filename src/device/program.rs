@@ -225,6 +225,16 @@ fn surface_defines(features: SurfaceFeatures, kind: DeviceKind) -> Vec<String> {
     defines
 }
 
+/// Whether a program of `kernels` on a device of `kind` asks for correctly rounded division
+/// and square root, as the host computes them. Progressive samples are held to the host's
+/// within a tolerance, not to the bit (tests/surfaces.rs), and on GPUs the correctly
+/// rounded routines cost the path tracer up to 1.6x of its speed; the tracing kernels keep
+/// them, as their hits must equal the host's (and on NVIDIA's GPUs they ran faster with
+/// them): docs/bench/2026-12-05-gpu-division.md.
+fn rounds_exactly(kernels: Kernels, kind: DeviceKind) -> bool {
+    !(kernels.only_sampling() && kind == DeviceKind::Gpu)
+}
+
 /// The defines of a program for a BVH in `layout`, with `stack_size` traversal stack
 /// entries: the layout's own (its file refuses to compile without it), the stack's size,
 /// and for the wide layouts the slots of a node.
@@ -390,7 +400,8 @@ impl ClDevice {
             extra.push_str(&format!("-cl-nv-maxrregcount={NV_SAMPLE_REGISTERS} "));
         }
         extra.push_str(extra_options);
-        let options = self.build_options(&defines, extra.trim_end());
+        let exact = rounds_exactly(kernels, self.info.kind);
+        let options = self.build_options(&defines, extra.trim_end(), exact);
         let source = program_source(&program_files(layout, sampling));
         let Some(cache) = &self.program_cache else {
             let program = self.build_source(&label, &source, &options)?;
@@ -481,16 +492,16 @@ impl ClDevice {
     /// constants as this device sees them (tests/layout.rs).
     pub fn compile_probe(&self) -> Result<ocl::Program> {
         let files = PROBE_FILES.map(String::from);
-        let options = self.build_options(&[], "");
+        let options = self.build_options(&[], "", true);
         self.build_source("probe.cl", &program_source(&files), &options)
     }
 
     /// cltrace's build options with `-D` for each define, then `extra`, then
-    /// `CLTRACE_BUILD_OPTIONS`. The host and device must round identically, so division and
-    /// square root are correctly rounded where the device offers it.
-    fn build_options(&self, defines: &[String], extra: &str) -> String {
+    /// `CLTRACE_BUILD_OPTIONS`. With `exact` the host and device must round identically,
+    /// so division and square root are correctly rounded where the device offers it.
+    fn build_options(&self, defines: &[String], extra: &str, exact: bool) -> String {
         let mut options = String::from("-cl-std=CL1.2");
-        if self.info.correctly_rounded_divide {
+        if exact && self.info.correctly_rounded_divide {
             options.push_str(" -cl-fp32-correctly-rounded-divide-sqrt");
         }
         for define in defines {
@@ -615,6 +626,25 @@ mod tests {
                 if *name != own {
                     assert!(!text.contains(&define), "{name} mentions {define}");
                 }
+            }
+        }
+    }
+
+    /// Only programs of sample kernels alone, and only on GPUs, give up correctly rounded
+    /// division and square root: every program that traces closest hits keeps them.
+    #[test]
+    fn only_gpu_sample_programs_round_division_loosely() {
+        use super::super::tracer::Kernel;
+        let path = Kernels::NONE.with(Kernel::SamplePath);
+        let samples = path.with(Kernel::SampleAo).with(Kernel::SampleShadow);
+        assert!(!rounds_exactly(path, DeviceKind::Gpu));
+        assert!(!rounds_exactly(samples, DeviceKind::Gpu));
+        for kind in [DeviceKind::Cpu, DeviceKind::Accelerator, DeviceKind::Other] {
+            assert!(rounds_exactly(path, kind), "{kind:?}");
+        }
+        for kind in [DeviceKind::Gpu, DeviceKind::Cpu] {
+            for tracing in [Kernels::PRIMARY, Kernels::TRACING, Kernels::ALL] {
+                assert!(rounds_exactly(tracing, kind), "{kind:?}");
             }
         }
     }
