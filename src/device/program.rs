@@ -227,10 +227,11 @@ fn surface_defines(features: SurfaceFeatures, kind: DeviceKind) -> Vec<String> {
 
 /// Whether a program of `kernels` on a device of `kind` asks for correctly rounded division
 /// and square root, as the host computes them. Progressive samples are held to the host's
-/// within a tolerance, not to the bit (tests/surfaces.rs), and on GPUs the correctly
-/// rounded routines cost the path tracer up to 1.6x of its speed; the tracing kernels keep
-/// them, as their hits must equal the host's (and on NVIDIA's GPUs they ran faster with
-/// them): docs/bench/2026-12-05-gpu-division.md.
+/// within a tolerance, not to the bit (tests/secondary.rs, tests/surfaces.rs), and on GPUs
+/// the correctly rounded routines cost the path tracer up to 1.5x of its speed; the
+/// tracing kernels keep them, as their hits must equal the host's (and on NVIDIA's GPUs
+/// they ran faster with them): docs/bench/2026-12-05-gpu-division.md and
+/// 2026-12-05-sample-rounding.md.
 fn rounds_exactly(kernels: Kernels, kind: DeviceKind) -> bool {
     !(kernels.only_sampling() && kind == DeviceKind::Gpu)
 }
