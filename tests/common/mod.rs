@@ -51,10 +51,26 @@ const IMPLEMENTATIONS: [(&str, &str, &str); 2] = [
 /// compiled once per device (Intel's runtime takes seconds a build and keeps no cache of
 /// its own). Where PoCL or Intel's runtime is missing, a notice says so and its device is
 /// not tested, except in CI (`CI` set), which installs both and fails without either.
+/// `CLTRACE_TEST_DEVICES` (selectors as `--device` takes them, e.g. `gpu`) keeps only the
+/// devices it names: on a GPU host, the GPU without the host's CPU device, which compiles
+/// the path tracer for minutes. CI refuses it, as it must test every implementation.
 pub fn devices() -> &'static [ClDevice] {
     static DEVICES: OnceLock<Vec<ClDevice>> = OnceLock::new();
     DEVICES.get_or_init(|| {
         let found = list_devices().unwrap_or_default();
+        if let Ok(list) = std::env::var("CLTRACE_TEST_DEVICES") {
+            assert!(
+                std::env::var_os("CI").is_none(),
+                "CI tests every device: unset CLTRACE_TEST_DEVICES"
+            );
+            let selectors: Vec<DeviceSelector> = list
+                .split(',')
+                .map(|s| s.parse().expect("a selector"))
+                .collect();
+            let named = DeviceSelector::pick_each(&selectors, &found)
+                .unwrap_or_else(|e| panic!("CLTRACE_TEST_DEVICES={list}: {e}"));
+            return named.into_iter().map(open).collect();
+        }
         for (what, platform, script) in IMPLEMENTATIONS {
             if !found.iter().any(|d| d.platform_name() == platform) {
                 assert!(
@@ -69,14 +85,14 @@ pub fn devices() -> &'static [ClDevice] {
             }
         }
         assert!(!found.is_empty(), "the OpenCL tests need a device");
-        found
-            .iter()
-            .map(|d| {
-                let selector = d.index().parse().expect("an index is a selector");
-                ClDevice::select(&selector).unwrap_or_else(|e| panic!("{}: {e}", label(d)))
-            })
-            .collect()
+        found.iter().map(open).collect()
     })
+}
+
+/// Opens the device `d` describes, or fails the test naming it.
+fn open(d: &DeviceInfo) -> ClDevice {
+    let selector = d.index().parse().expect("an index is a selector");
+    ClDevice::select(&selector).unwrap_or_else(|e| panic!("{}: {e}", label(d)))
 }
 
 /// A device as failure messages name it: its index, name and platform.
