@@ -25,9 +25,11 @@ const BUILD_OPTIONS_VAR: &str = "CLTRACE_BUILD_OPTIONS";
 /// The most registers a work-item of a program of sample kernels may use on devices that
 /// take NVIDIA's build options. The path tracer asked for 112-137, which leaves too few
 /// paths resident to hide memory latency; capped, it spills a little (to cached local
-/// memory) and on the H200 ran 1.1-1.2x faster (56 was the best of 40 to 80 over a
-/// diffuse box, a conductor and a glass scene; docs/bench/2026-12-04-gpu-path.md).
-const NV_SAMPLE_REGISTERS: u32 = 56;
+/// memory) and on the H200 ran 1.1-1.2x faster (docs/bench/2026-12-04-gpu-path.md). Of
+/// 40 to 128, 64 has been the best over a diffuse box, a conductor and a glass scene
+/// since the programs round division loosely: 3-4% ahead of 56 on an H100
+/// (docs/bench/2026-12-05-gpu-path-options.md).
+const NV_SAMPLE_REGISTERS: u32 = 64;
 /// When set, every successful build's log goes to stderr too (development: with
 /// `-cl-nv-verbose` NVIDIA's log gives each kernel's registers and spills).
 const BUILD_LOG_VAR: &str = "CLTRACE_BUILD_LOG";
