@@ -3,6 +3,17 @@
  * src/render/sampling.rs so that the host reference and the devices draw the same numbers.
  * DIMS_PER_BOUNCE, LENS_DIM and LENS_TRIES come from the host (src/render/sampling.rs). */
 
+/* Programs of sample kernels (RELAXED_SHADING, src/device/program.rs) hold their samples
+ * to the host's within a tolerance, not to the bit: from here on their shading may fuse
+ * multiply-adds and use the native sine and cosine (PoCL's accurate ones were the most
+ * of it: 1.11-1.30x on 2 cores). The triangle test and the traversal, earlier in the
+ * program, keep contraction off, and so stay watertight. */
+#ifdef RELAXED_SHADING
+#pragma OPENCL FP_CONTRACT ON
+#define sin native_sin
+#define cos native_cos
+#endif
+
 /* Chris Wellons' lowbias32 integer hash. */
 FORCE_INLINE uint hash_u32(uint x) {
     x ^= x >> 16; x *= 0x7feb352du;

@@ -238,6 +238,17 @@ fn rounds_exactly(kernels: Kernels, kind: DeviceKind) -> bool {
     !(kernels.only_sampling() && kind == DeviceKind::Gpu)
 }
 
+/// Whether a program of `kernels` relaxes its shading's arithmetic (`RELAXED_SHADING`,
+/// cl/sampling.cl: fused multiply-adds and the native sine and cosine from the sampling
+/// on, the triangle test and traversal untouched), on every device. Only programs of
+/// sample kernels, for the same reason as [`rounds_exactly`]: their samples are held to
+/// the host's within a tolerance. The path tracer ran 1.11-1.30x as fast on PoCL (2
+/// cores) and 1.02-1.08x on an H100, with image means equal to seven digits on PoCL
+/// (docs/bench/2026-12-05-gpu-path-options.md).
+fn relaxes_shading(kernels: Kernels) -> bool {
+    kernels.only_sampling()
+}
+
 /// The defines of a program for a BVH in `layout`, with `stack_size` traversal stack
 /// entries: the layout's own (its file refuses to compile without it), the stack's size,
 /// and for the wide layouts the slots of a node.
@@ -394,6 +405,9 @@ impl ClDevice {
         };
         defines.extend(surface_defines(features, self.info.kind));
         defines.extend(kernels.defines());
+        if relaxes_shading(kernels) {
+            defines.push("RELAXED_SHADING".into());
+        }
         let label = match layout {
             Some(layout) => format!("{} ({})", kernels.names(), layout.name()),
             None => format!("{} (brute force)", kernels.names()),
@@ -649,6 +663,19 @@ mod tests {
             for tracing in [Kernels::PRIMARY, Kernels::TRACING, Kernels::ALL] {
                 assert!(rounds_exactly(tracing, kind), "{kind:?}");
             }
+        }
+    }
+
+    #[test]
+    fn only_sample_programs_relax_their_shading() {
+        use super::super::tracer::Kernel;
+        let path = Kernels::NONE.with(Kernel::SamplePath);
+        assert!(relaxes_shading(path));
+        assert!(relaxes_shading(
+            path.with(Kernel::SampleAo).with(Kernel::SampleShadow)
+        ));
+        for tracing in [Kernels::PRIMARY, Kernels::TRACING, Kernels::ALL] {
+            assert!(!relaxes_shading(tracing));
         }
     }
 
