@@ -666,6 +666,8 @@ mod tests {
         }
     }
 
+    /// Every program of sample kernels alone relaxes its shading, on any device; no program
+    /// that traces closest hits does.
     #[test]
     fn only_sample_programs_relax_their_shading() {
         use super::super::tracer::Kernel;
