@@ -10,6 +10,10 @@
  * program, keep contraction off, and so stay watertight. */
 #ifdef RELAXED_SHADING
 #pragma OPENCL FP_CONTRACT ON
+/* PoCL's headers define both as macros: redefining them without undefining warned on
+ * every compile. */
+#undef sin
+#undef cos
 #define sin native_sin
 #define cos native_cos
 #endif

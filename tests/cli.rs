@@ -1189,6 +1189,32 @@ fn a_missing_mtl_file_was_not_named_in_its_warning() {
     );
 }
 
+/// Regression (issue 19): PoCL's compiler printed "2 warnings generated." on every compile
+/// of a sample program, because cl/sampling.cl redefined the `sin` and `cos` macros of
+/// PoCL's headers; a quiet render whose program compiles afresh prints nothing at all.
+#[test]
+fn compiling_a_sample_program_printed_pocls_warnings() {
+    let pocl = "Portable Computing Language";
+    let found = cltrace::device::list_devices().unwrap_or_default();
+    if !found.iter().any(|d| d.platform_name() == pocl) {
+        assert!(std::env::var_os("CI").is_none(), "CI must have PoCL");
+        eprintln!("notice: PoCL is not installed: its compiler's messages are not checked");
+        return;
+    }
+    let w = Work::new();
+    let quad = w.quad();
+    let args = with(
+        render_args(&quad, &w.out("out.png"), "cl-bvh"),
+        &["--shade", "path", "--spp", "1", "-q"],
+    );
+    let mut cmd = cltrace(&w.input, &args);
+    cmd.env("CLTRACE_DEVICE", pocl)
+        .env("CLTRACE_KERNEL_CACHE", "off");
+    let out = run(cmd);
+    succeeded(&out);
+    assert_eq!(text(&out.stderr), "", "a quiet render printed something");
+}
+
 /// Regression (issue 15): a scene file's bad `light` was an error without the file and
 /// line (it was checked after the file was read); it is at its line like any bad value.
 #[test]
