@@ -227,6 +227,24 @@ fn surface_defines(features: SurfaceFeatures, kind: DeviceKind) -> Vec<String> {
     defines
 }
 
+/// The options a program of `kernels` takes on devices that take NVIDIA's (each followed by
+/// a space): sample programs are capped at [`NV_SAMPLE_REGISTERS`], and brute-force
+/// (`brute`) sample programs are built unoptimized. NVIDIA's optimizer (driver 580.159.04,
+/// on an H100) miscompiled the brute-force path program: its loop never ended, and once
+/// made to end it gave other samples than every layout's program; unoptimized, it gives
+/// theirs to the bit (docs/bench/2026-12-05-nvidia-brute-force.md). Brute force is the
+/// reference, not the fast method.
+fn nv_options(kernels: Kernels, brute: bool) -> String {
+    let mut options = String::new();
+    if kernels.only_sampling() {
+        options.push_str(&format!("-cl-nv-maxrregcount={NV_SAMPLE_REGISTERS} "));
+        if brute {
+            options.push_str("-cl-nv-opt-level=0 ");
+        }
+    }
+    options
+}
+
 /// Whether a program of `kernels` on a device of `kind` asks for correctly rounded division
 /// and square root, as the host computes them. Progressive samples are held to the host's
 /// within a tolerance, not to the bit (tests/secondary.rs, tests/surfaces.rs), and on GPUs
@@ -413,8 +431,8 @@ impl ClDevice {
             None => format!("{} (brute force)", kernels.names()),
         };
         let mut extra = String::new();
-        if kernels.only_sampling() && self.info.nv_compiler_options {
-            extra.push_str(&format!("-cl-nv-maxrregcount={NV_SAMPLE_REGISTERS} "));
+        if self.info.nv_compiler_options {
+            extra.push_str(&nv_options(kernels, bvh.is_none()));
         }
         extra.push_str(extra_options);
         let exact = rounds_exactly(kernels, self.info.kind);
@@ -662,6 +680,31 @@ mod tests {
         for kind in [DeviceKind::Gpu, DeviceKind::Cpu] {
             for tracing in [Kernels::PRIMARY, Kernels::TRACING, Kernels::ALL] {
                 assert!(rounds_exactly(tracing, kind), "{kind:?}");
+            }
+        }
+    }
+
+    /// On NVIDIA, sample programs are capped in registers, and brute-force ones are built
+    /// unoptimized too; tracing programs take neither.
+    #[test]
+    fn nvidia_builds_brute_force_sample_programs_unoptimized() {
+        use super::super::tracer::Kernel;
+        let cap = format!("-cl-nv-maxrregcount={NV_SAMPLE_REGISTERS} ");
+        for samples in [
+            Kernels::NONE.with(Kernel::SamplePath),
+            Kernels::NONE
+                .with(Kernel::SampleAo)
+                .with(Kernel::SampleShadow),
+        ] {
+            assert_eq!(nv_options(samples, false), cap);
+            assert_eq!(
+                nv_options(samples, true),
+                format!("{cap}-cl-nv-opt-level=0 ")
+            );
+        }
+        for tracing in [Kernels::PRIMARY, Kernels::TRACING, Kernels::ALL] {
+            for brute in [false, true] {
+                assert_eq!(nv_options(tracing, brute), "");
             }
         }
     }
