@@ -473,9 +473,9 @@ fn launches_of_many_samples_sum_as_launches_of_one() {
 }
 
 /// Brute force and every layout's traversal give the same samples to the bit. Regression
-/// (issue 19): on an H100 this test never ended, as NVIDIA's optimizer miscompiled the
-/// brute-force path program, which NVIDIA now builds unoptimized (`nv_options` in
-/// src/device/program.rs).
+/// (issue 19): on an H100 this test never ended, as the brute-force path program built by
+/// NVIDIA's optimizing compiler never did; NVIDIA now builds it unoptimized (`nv_options`
+/// in src/device/program.rs).
 #[test]
 fn brute_force_and_every_bvh_layout_give_the_same_samples() {
     on_every_device(|device| {
