@@ -424,6 +424,21 @@ fn render_with_opencl_matches_the_cpu() {
     }
 }
 
+/// Whether the OpenCL platform `platform` is installed. Where it is not, a notice says what
+/// goes unchecked, and CI (`CI` set), which installs it, fails instead.
+fn platform_installed(platform: &str, unchecked: &str) -> bool {
+    let found = cltrace::device::list_devices().unwrap_or_default();
+    if found.iter().any(|d| d.platform_name() == platform) {
+        return true;
+    }
+    assert!(
+        std::env::var_os("CI").is_none(),
+        "CI must have the OpenCL platform \"{platform}\""
+    );
+    eprintln!("notice: the OpenCL platform \"{platform}\" is not installed: {unchecked}");
+    false
+}
+
 /// CI turns off the implicit vectorizer of Intel's OpenCL CPU runtime
 /// (`CL_CONFIG_USE_VECTORIZER=False` in .ci/run: 2 s a compile instead of 24 s); this run
 /// keeps it on, so that the traversal kernels as users get them on Intel's runtime are
@@ -431,15 +446,7 @@ fn render_with_opencl_matches_the_cpu() {
 #[test]
 fn intels_vectorised_kernels_render_as_the_host_does() {
     let intel = "Intel(R) OpenCL";
-    let found = cltrace::device::list_devices().unwrap_or_default();
-    if !found.iter().any(|d| d.platform_name() == intel) {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI must have Intel's runtime"
-        );
-        eprintln!(
-            "notice: Intel's OpenCL runtime is not installed: its vectorised kernels are not tested"
-        );
+    if !platform_installed(intel, "its vectorised kernels are not tested") {
         return;
     }
     let w = Work::new();
@@ -1195,10 +1202,7 @@ fn a_missing_mtl_file_was_not_named_in_its_warning() {
 #[test]
 fn compiling_a_sample_program_printed_pocls_warnings() {
     let pocl = "Portable Computing Language";
-    let found = cltrace::device::list_devices().unwrap_or_default();
-    if !found.iter().any(|d| d.platform_name() == pocl) {
-        assert!(std::env::var_os("CI").is_none(), "CI must have PoCL");
-        eprintln!("notice: PoCL is not installed: its compiler's messages are not checked");
+    if !platform_installed(pocl, "its compiler's messages are not checked") {
         return;
     }
     let w = Work::new();
