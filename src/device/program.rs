@@ -228,8 +228,8 @@ fn surface_defines(features: SurfaceFeatures, kind: DeviceKind) -> Vec<String> {
 }
 
 /// The options a program of `kernels` takes on devices that take NVIDIA's (each followed by
-/// a space): sample programs are capped at [`NV_SAMPLE_REGISTERS`], and brute-force
-/// (`brute`) sample programs are built unoptimized. Optimized by NVIDIA's compiler (driver
+/// a space): programs of sample kernels alone are capped at [`NV_SAMPLE_REGISTERS`], and
+/// brute-force (`brute`) programs holding a sample kernel are built unoptimized. Optimized by NVIDIA's compiler (driver
 /// 580.159.04, on an H100), the brute-force path program's loop never ended, and once made
 /// to end it gave other samples than every layout's program; unoptimized, it gives theirs
 /// to the bit. Whether the compiler is at fault or exploits undefined behaviour that no
@@ -240,9 +240,11 @@ fn nv_options(kernels: Kernels, brute: bool) -> String {
     let mut options = String::new();
     if kernels.only_sampling() {
         options.push_str(&format!("-cl-nv-maxrregcount={NV_SAMPLE_REGISTERS} "));
-        if brute {
-            options.push_str("-cl-nv-opt-level=0 ");
-        }
+    }
+    // Any program holding a sample kernel, also one with the tracing kernels beside it
+    // (the library's Kernels::ALL, as the tests prepare).
+    if brute && kernels.has_sampling() {
+        options.push_str("-cl-nv-opt-level=0 ");
     }
     options
 }
@@ -686,8 +688,8 @@ mod tests {
         }
     }
 
-    /// On NVIDIA, sample programs are capped in registers, and brute-force ones are built
-    /// unoptimized too; tracing programs take neither.
+    /// On NVIDIA, sample programs are capped in registers, and brute-force programs with a
+    /// sample kernel are built unoptimized; tracing programs take neither.
     #[test]
     fn nvidia_builds_brute_force_sample_programs_unoptimized() {
         use super::super::tracer::Kernel;
@@ -704,11 +706,15 @@ mod tests {
                 format!("{cap}-cl-nv-opt-level=0 ")
             );
         }
-        for tracing in [Kernels::PRIMARY, Kernels::TRACING, Kernels::ALL] {
+        for tracing in [Kernels::PRIMARY, Kernels::TRACING] {
             for brute in [false, true] {
                 assert_eq!(nv_options(tracing, brute), "");
             }
         }
+        // Regression: a program of every kernel (the tests') held the brute-force path
+        // kernel optimized, and the GPU's brute-force test still never ended.
+        assert_eq!(nv_options(Kernels::ALL, false), "");
+        assert_eq!(nv_options(Kernels::ALL, true), "-cl-nv-opt-level=0 ");
     }
 
     /// Every program of sample kernels alone relaxes its shading, on any device; no program
