@@ -4,7 +4,7 @@
 
 use crate::common::*;
 use cltrace::bvh::Bin32Bvh;
-use cltrace::bvh::{BuildOptions, Builder, Bvh, MAX_DEPTH};
+use cltrace::bvh::{BuildOptions, Builder, Bvh, MAX_DEPTH, SWEEP_UP_TO};
 use cltrace::geometry::Ray;
 use cltrace::input::generate::Generator;
 use cltrace::intersect::ClosestHit;
@@ -32,7 +32,7 @@ proptest! {
 #[test]
 fn binned_sah_cost_is_within_5_percent_of_the_sweep() {
     for (name, mesh) in test_scenes() {
-        let binned = Bvh::build(&mesh, &BuildOptions::default());
+        let binned = Bvh::build(&mesh, &options(Builder::Binned, 32, 8));
         let sweep = Bvh::build(&mesh, &options(Builder::Sweep, 32, 8));
         binned.check(&mesh).unwrap();
         sweep.check(&mesh).unwrap();
@@ -46,6 +46,42 @@ fn binned_sah_cost_is_within_5_percent_of_the_sweep() {
             "{name}: binned SAH cost {b} is more than 5% above the sweep's {s}"
         );
     }
+}
+
+/// The default builder sweeps scenes of up to `SWEEP_UP_TO` triangles and bins larger ones.
+#[test]
+fn auto_sweeps_small_scenes_and_bins_large_ones() {
+    for (triangles, picked) in [
+        (SWEEP_UP_TO, Builder::Sweep),
+        (SWEEP_UP_TO + 1, Builder::Binned),
+    ] {
+        let mesh = generate(Generator::Soup {
+            triangles: triangles as u32,
+            seed: 3,
+        });
+        assert_eq!(mesh.triangle_count(), triangles);
+        let auto = Bvh::build(&mesh, &BuildOptions::default());
+        let other = if picked == Builder::Sweep {
+            Builder::Binned
+        } else {
+            Builder::Sweep
+        };
+        assert_eq!(
+            auto,
+            Bvh::build(&mesh, &options(picked, 32, 8)),
+            "{triangles}"
+        );
+        assert_ne!(
+            auto,
+            Bvh::build(&mesh, &options(other, 32, 8)),
+            "{triangles}"
+        );
+    }
+    assert!(Builder::Auto.about().contains(&format!(
+        "{},{}",
+        SWEEP_UP_TO / 1000,
+        SWEEP_UP_TO % 1000
+    )));
 }
 
 /// Builds with every option set, checks the tree and its hits, returns the default tree.

@@ -211,7 +211,7 @@ fn device_frames_match(tracers: &[DeviceTracer], builds: &[(&str, BuildOptions)]
 }
 
 fn default_build() -> (&'static str, BuildOptions) {
-    ("binned", BuildOptions::default())
+    ("auto", BuildOptions::default())
 }
 
 #[test]
@@ -226,6 +226,7 @@ fn opencl_bvh_matches_the_cpu_reference() {
         ..Default::default()
     };
     let one_per_leaf = BuildOptions {
+        builder: Builder::Binned,
         max_leaf_size: 1,
         bins: 16,
         ..Default::default()

@@ -226,7 +226,12 @@ pub(super) fn build(mesh: &Mesh, options: &BuildOptions) -> Bvh {
         first: 0,
     };
     let bounds = prims.bounds();
-    let ctx = Ctx { options: *options };
+    let ctx = Ctx {
+        options: BuildOptions {
+            builder: options.builder.for_triangles(n),
+            ..*options
+        },
+    };
     let (tree, depth) = ctx.top(prims, bounds, 1, &mut Scratch::new(options.bins as usize));
     // Zeroed memory comes from the system untouched, so the pages are first touched (and
     // paid for) by the parallel writers, not here.
@@ -376,7 +381,8 @@ impl Ctx {
             Split::None
         } else {
             match self.options.builder {
-                Builder::Binned if n > SMALL => {
+                // `Auto` was resolved in `build`.
+                Builder::Binned | Builder::Auto if n > SMALL => {
                     self.binned_split(prims, bounds, centroids, n <= max_leaf, &mut scratch.bins)
                 }
                 _ if n <= SMALL => small_sweep_split(prims, bounds, n <= max_leaf),

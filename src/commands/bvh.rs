@@ -4,7 +4,7 @@ use std::fmt::Write;
 use std::path::PathBuf;
 
 use crate::bvh::{Bin32Bvh, DeviceLayout, Layout};
-use crate::bvh::{BuildOptions, Bvh, INTERSECTION_COST, TRAVERSAL_COST};
+use crate::bvh::{BuildOptions, Builder, Bvh, INTERSECTION_COST, TRAVERSAL_COST};
 use crate::error::Result;
 use crate::input::scene_file::SceneDescription;
 use crate::report::{Timings, format_ms};
@@ -77,10 +77,11 @@ pub fn bvh_report(req: &BvhRequest) -> Result<String> {
     line(
         "builder",
         format!(
-            "{:?}, {} bins, max leaf {}",
-            options.builder, options.bins, options.max_leaf_size
-        )
-        .to_lowercase(),
+            "{}, {} bins, max leaf {}",
+            builder_name(options.builder, s.triangles),
+            options.bins,
+            options.max_leaf_size
+        ),
     );
     line("nodes", s.nodes.to_string());
     line("leaves", s.leaves.to_string());
@@ -96,7 +97,7 @@ pub fn bvh_report(req: &BvhRequest) -> Result<String> {
             line(
                 &format!(
                     "SAH cost ({})",
-                    format!("{:?}", options.builder).to_lowercase()
+                    options.builder.for_triangles(s.triangles).name()
                 ),
                 format!("{built_cost:.3} {costs}"),
             );
@@ -153,4 +154,12 @@ pub fn bvh_report(req: &BvhRequest) -> Result<String> {
         .expect("writing to a String");
     }
     Ok(out)
+}
+
+/// The builder's name, with the one `auto` picked for a scene of `triangles`.
+fn builder_name(builder: Builder, triangles: usize) -> String {
+    match builder.for_triangles(triangles) {
+        picked if picked != builder => format!("{} ({})", builder.name(), picked.name()),
+        _ => builder.name().to_string(),
+    }
 }

@@ -10,7 +10,8 @@ use super::values::{choice, whole_number};
 /// BVH construction flags, shared by the commands that build one.
 #[derive(Args)]
 pub struct BuildArgs {
-    /// BVH builder: binned SAH (fast) or the exact sweep (slow, the quality reference)
+    /// BVH builder: binned SAH (fast), the exact sweep (slow, the quality reference), or auto:
+    /// the sweep on small scenes
     #[arg(long, value_parser = choice::<Builder>(), default_value = Builder::default().name())]
     builder: Builder,
 

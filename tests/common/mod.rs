@@ -252,6 +252,7 @@ pub fn options(builder: Builder, bins: u32, max_leaf_size: u32) -> BuildOptions 
 pub fn all_options() -> Vec<BuildOptions> {
     vec![
         BuildOptions::default(),
+        options(Builder::Binned, 32, 8),
         options(Builder::Binned, 2, 1),
         options(Builder::Binned, 16, 4),
         options(Builder::Binned, 64, 255),
