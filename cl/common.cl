@@ -16,6 +16,17 @@
  * measured"); NVIDIA inlines them anyway. */
 #define FORCE_INLINE inline __attribute__((always_inline))
 
+/* Every kernel a render launches is declared KERNEL. Intel's CPU runtime packs work-items
+ * into SIMD lanes wherever a work-group fills them (8 x 8 groups do on AVX2 CPUs): its
+ * traversal and stack reads become gathers and every lane walks the longest loop, which
+ * ran path tracing 4-5x and ray tracing 3x slower than the scalar kernel it builds when
+ * told not to pack (docs/bench/2026-12-05-intel-scalar.md). */
+#ifdef cl_intel_vec_len_hint
+#define KERNEL __kernel __attribute__((intel_vec_len_hint(1)))
+#else
+#define KERNEL __kernel
+#endif
+
 /* A triangle as the intersector reads it: three corners, each padded to 16 bytes so that a
  * corner is one vector load. `prim` is the triangle's index in file order, `material` its
  * index into the Material array, `flags` TRIANGLE_MASKED for a cut-out material and

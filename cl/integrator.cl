@@ -89,7 +89,7 @@ FORCE_INLINE bool occluded(SCENE_PARAMS, float3 org, float3 dir, float t_max) {
 FORCE_INLINE float camera_cone(float4 du, float t) { return t * length3(du.xyz); }
 
 #ifdef KERNEL_SAMPLE_AO
-__kernel void sample_ao(SAMPLE_PARAMS) {
+KERNEL void sample_ao(SAMPLE_PARAMS) {
     SAMPLE_PIXEL
     long3 sums = (long3)(0);
     uint count = 0;
@@ -116,7 +116,7 @@ __kernel void sample_ao(SAMPLE_PARAMS) {
 #endif
 
 #ifdef KERNEL_SAMPLE_SHADOW
-__kernel void sample_shadow(SAMPLE_PARAMS) {
+KERNEL void sample_shadow(SAMPLE_PARAMS) {
     SAMPLE_PIXEL
     long3 sums = (long3)(0);
     uint count = 0;
@@ -398,7 +398,7 @@ FORCE_INLINE bool path_vertex(SCENE_PARAMS, LIGHT_PARAMS, float4 du, float offse
  * of which traces one ray of the current path: a work-item whose path ends starts its next
  * sample in the next turn (path regeneration), so that the work-items of a SIMD group keep
  * tracing together instead of waiting, sample by sample, for their longest path. */
-__kernel void sample_path(SAMPLE_PARAMS) {
+KERNEL void sample_path(SAMPLE_PARAMS) {
     SAMPLE_PIXEL
     /* Each sample's sums go to the pixel's as it ends, not kept in registers across every
      * traversal: on the H200 that made path tracing 1-12% faster

@@ -46,18 +46,18 @@ FORCE_INLINE void primary_pixel(PRIMARY_PARAMS, const bool general) {
 
 /* A perspective camera's primary rays, without barycentrics (barycentrics is not read). */
 #ifdef KERNEL_TRACE_PRIMARY
-__kernel void trace_primary(PRIMARY_PARAMS) { primary_pixel(PRIMARY, false); }
+KERNEL void trace_primary(PRIMARY_PARAMS) { primary_pixel(PRIMARY, false); }
 #endif
 
 /* Any camera's primary rays, with barycentrics where they are asked for. */
 #ifdef KERNEL_TRACE_PRIMARY_GENERAL
-__kernel void trace_primary_general(PRIMARY_PARAMS) { primary_pixel(PRIMARY, true); }
+KERNEL void trace_primary_general(PRIMARY_PARAMS) { primary_pixel(PRIMARY, true); }
 #endif
 
 /* Arbitrary rays: origin and t_max in rays[2i] (xyz, w), direction in rays[2i + 1]. With
  * any_hit set, any hit before t_max is reported, not necessarily the closest. */
 #ifdef KERNEL_TRACE_RAYS
-__kernel void trace_rays(SCENE_PARAMS, __global const float4* rays, uint count, int any_hit,
+KERNEL void trace_rays(SCENE_PARAMS, __global const float4* rays, uint count, int any_hit,
                          __global Hit* hits) {
     uint i = get_global_id(0);
     if (i >= count) return;
