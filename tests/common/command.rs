@@ -1,10 +1,13 @@
 //! Running the `cltrace` binary. Every run the tests make goes through [`cltrace`], which
 //! points the tuning cache (`CLTRACE_TUNE_CACHE`) at a file that is never written, and
 //! `HOME` and `XDG_CACHE_HOME` into a folder of the build's own, so that no run reads (or
-//! writes) the user's `~/.cache/cltrace/tune.toml`.
+//! writes) the user's `~/.cache/cltrace/tune.toml`. A run gets the environment the test
+//! process started with, not the one OpenCL drivers loaded into it have changed since.
 
+use std::ffi::OsString;
 use std::path::PathBuf;
 use std::process::{Command, Output};
+use std::sync::OnceLock;
 
 pub const BIN: &str = env!("CARGO_BIN_EXE_cltrace");
 
@@ -27,17 +30,22 @@ pub fn no_tune_cache() -> PathBuf {
 pub fn cltrace() -> Command {
     let home = test_home();
     let mut cmd = Command::new(BIN);
-    cmd.env("HOME", &home)
+    cmd.env_clear()
+        .envs(initial_environment().iter().cloned())
+        .env("HOME", &home)
         .env("XDG_CACHE_HOME", home.join(".cache"))
         .env("CLTRACE_TUNE_CACHE", no_tune_cache());
     cmd
 }
 
-/// `inner` run through another program (`oclgrind`, a shell): `wrapper` with its own
-/// `args`, then `inner`'s program and arguments, with `inner`'s environment and folder.
+/// `inner` (made by [`cltrace`]) run through another program (`oclgrind`, a shell):
+/// `wrapper` with its own `args`, then `inner`'s program and arguments, with `inner`'s
+/// environment and folder. [`cltrace`] clears the environment it starts from, so `inner`'s
+/// variables are all it has: a variable removed from it is not listed.
 pub fn wrapped<S: AsRef<std::ffi::OsStr>>(inner: &Command, wrapper: &str, args: &[S]) -> Command {
     let mut cmd = Command::new(wrapper);
-    cmd.args(args)
+    cmd.env_clear()
+        .args(args)
         .arg(inner.get_program())
         .args(inner.get_args());
     if let Some(dir) = inner.get_current_dir() {
@@ -71,4 +79,29 @@ pub fn succeeded(out: &Output) {
         text(&out.stdout),
         text(&out.stderr)
     );
+}
+
+/// The environment the test process started with (`/proc/self/environ`, which later
+/// changes leave alone; the current one where that cannot be read). Regression: on the GPU
+/// host a driver loaded into the tests rewrote `OCL_ICD_FILENAMES` without NVIDIA's
+/// library, and every run spawned after that found no GPU.
+fn initial_environment() -> &'static [(OsString, OsString)] {
+    static INITIAL: OnceLock<Vec<(OsString, OsString)>> = OnceLock::new();
+    INITIAL.get_or_init(|| {
+        use std::os::unix::ffi::OsStrExt;
+        let Ok(block) = std::fs::read("/proc/self/environ") else {
+            return std::env::vars_os().collect();
+        };
+        block
+            .split(|&b| b == 0)
+            .filter_map(|entry| {
+                let eq = entry.iter().position(|&b| b == b'=')?;
+                let (key, value) = (&entry[..eq], &entry[eq + 1..]);
+                (!key.is_empty()).then(|| {
+                    let os = |b: &[u8]| std::ffi::OsStr::from_bytes(b).to_os_string();
+                    (os(key), os(value))
+                })
+            })
+            .collect()
+    })
 }
