@@ -71,7 +71,8 @@ impl SahCost {
 pub enum Builder {
     /// The exact sweep for scenes of up to [`SWEEP_UP_TO`] triangles, binned above: on
     /// small scenes of large triangles the bins miss the best planes (compare.py's spheres
-    /// path-trace 5-10% faster on an H100 swept), and sweeping them takes milliseconds.
+    /// path-trace 2-8% faster on an H100 swept: docs/bench/2026-12-05-auto-builder.md),
+    /// and sweeping them takes milliseconds.
     #[default]
     Auto,
     /// Binned SAH over centroids on all three axes (Wald 2007), parallel: fast.

@@ -1,11 +1,12 @@
 //! Compiled programs kept between runs, so that a second render does not compile: one file
 //! per program in the user's cache folder, named by a hash of everything the binary
-//! depends on (cltrace's version, the device, its driver and OpenCL C version, the build
-//! options and the source). An entry holds that key in full and a checksum of itself, so a
+//! depends on (cltrace's version, the device, its driver and OpenCL C version, the
+//! drivers' compiler settings in the environment, the build options and the source). An entry holds that key in full and a checksum of itself, so a
 //! hash collision, a truncated or a corrupt file reads as a miss and is rebuilt; entries
 //! are written atomically. The cache is an optimisation: no failure of it fails a render.
 
 use crate::hash::fnv1a;
+use std::ffi::OsString;
 use std::path::PathBuf;
 
 use super::DeviceInfo;
@@ -80,10 +81,11 @@ impl ProgramCache {
     /// The entry of the program built from `source` with `options` for `device`.
     pub(crate) fn entry(&self, device: &DeviceInfo, options: &str, source: &str) -> Entry {
         let key = format!(
-            "cltrace {}\n{}\n{}\n{options}\nsource {} bytes, fnv1a {:016x}\n",
+            "cltrace {}\n{}\n{}\n{}{options}\nsource {} bytes, fnv1a {:016x}\n",
             env!("CARGO_PKG_VERSION"),
             device.key(),
             device.opencl_c_version,
+            compiler_settings(std::env::vars_os()),
             source.len(),
             fnv1a(source.as_bytes()),
         )
@@ -118,6 +120,20 @@ impl Entry {
         })
         .map_err(|e| e.to_string())
     }
+}
+
+/// The variables of `environment` through which the drivers take compiler settings, one
+/// `name=value` line each, sorted: Intel's CPU runtime's `CL_CONFIG_*`
+/// (`CL_CONFIG_USE_VECTORIZER` changes the code it builds) and PoCL's `POCL_*`. Without
+/// them a binary built under one setting served another.
+fn compiler_settings(environment: impl Iterator<Item = (OsString, OsString)>) -> String {
+    let mut lines: Vec<String> = environment
+        .map(|(name, value)| (name.to_string_lossy().into_owned(), value))
+        .filter(|(name, _)| name.starts_with("CL_CONFIG_") || name.starts_with("POCL_"))
+        .map(|(name, value)| format!("{name}={}\n", value.to_string_lossy()))
+        .collect();
+    lines.sort();
+    lines.concat()
 }
 
 /// An entry's bytes: the magic line, the key and the binary (each after its length), then
@@ -165,6 +181,39 @@ fn parse(bytes: &[u8], key: &[u8]) -> Result<Vec<u8>, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The drivers' compiler settings are part of the key, in any order; other variables
+    /// are not.
+    #[test]
+    fn the_drivers_compiler_settings_key_the_entry() {
+        let env = |vars: &[(&str, &str)]| {
+            compiler_settings(
+                vars.iter()
+                    .map(|(n, v)| (OsString::from(n), OsString::from(v))),
+            )
+        };
+        let on = env(&[
+            ("HOME", "/h"),
+            ("CL_CONFIG_USE_VECTORIZER", "True"),
+            ("POCL_DEVICES", "pthread"),
+        ]);
+        assert_eq!(on, "CL_CONFIG_USE_VECTORIZER=True\nPOCL_DEVICES=pthread\n");
+        assert_eq!(
+            on,
+            env(&[
+                ("POCL_DEVICES", "pthread"),
+                ("CL_CONFIG_USE_VECTORIZER", "True")
+            ])
+        );
+        assert_ne!(
+            on,
+            env(&[
+                ("CL_CONFIG_USE_VECTORIZER", "False"),
+                ("POCL_DEVICES", "pthread")
+            ])
+        );
+        assert_eq!(env(&[("HOME", "/h"), ("PATH", "/bin")]), "");
+    }
 
     #[test]
     fn an_entry_reads_back_and_any_damage_is_refused() {
