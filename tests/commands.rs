@@ -182,6 +182,25 @@ fn render_reads_the_tuning_cache_it_is_pointed_at() {
     );
 }
 
+/// `render -v` names the builder that built the tree: the one `auto` (the default) picked,
+/// binned for the built-in scene's 454,720 triangles and the exact sweep for a quad's two.
+#[test]
+fn verbose_render_names_the_builder_auto_picked() {
+    let dir = tempfile::tempdir().unwrap();
+    let device = test_device();
+    let bvh_line = |extra: &[&str]| verbose_line(dir.path(), &device, None, extra, "bvh: ");
+    let built_in = bvh_line(&[]);
+    assert!(built_in.starts_with("bvh: binned builder, "), "{built_in}");
+    let quad = dir.path().join("quad.obj");
+    std::fs::write(
+        &quad,
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n",
+    )
+    .unwrap();
+    let swept = bvh_line(&[quad.to_str().unwrap()]);
+    assert!(swept.starts_with("bvh: sweep builder, "), "{swept}");
+}
+
 /// `render -v` names the layout and work-group its kernels run with, and where they came
 /// from: the tuning cache's (its work-group too), a flag's, or the device's default.
 #[test]
