@@ -439,14 +439,25 @@ fn platform_installed(platform: &str, unchecked: &str) -> bool {
     false
 }
 
+/// The platform name of Intel's OpenCL CPU runtime.
+const INTEL: &str = "Intel(R) OpenCL";
+
+/// `cltrace args` on Intel's runtime with its implicit vectorizer as users have it (on):
+/// CI turns it off for every other run.
+fn on_intel_as_users_have_it<S: AsRef<OsStr>>(cwd: &Path, args: &[S]) -> Command {
+    let mut cmd = cltrace(cwd, args);
+    cmd.env("CLTRACE_DEVICE", INTEL)
+        .env_remove("CL_CONFIG_USE_VECTORIZER");
+    cmd
+}
+
 /// CI turns off the implicit vectorizer of Intel's OpenCL CPU runtime
 /// (`CL_CONFIG_USE_VECTORIZER=False` in .ci/run: faster compiles); this run keeps it on,
 /// so that the traversal kernels as users get them on Intel's runtime are checked too:
 /// the same hits as the host, on every pixel.
 #[test]
 fn intels_kernels_with_its_vectorizer_on_render_as_the_host_does() {
-    let intel = "Intel(R) OpenCL";
-    if !platform_installed(intel, "its vectorised kernels are not tested") {
+    if !platform_installed(INTEL, "its kernels with the vectorizer on are not tested") {
         return;
     }
     let w = Work::new();
@@ -456,10 +467,7 @@ fn intels_kernels_with_its_vectorizer_on_render_as_the_host_does() {
         let hits = w.out(&format!("{method}.bin"));
         let mut args = render_args(&quad, &w.out(&format!("{method}.png")), method);
         args.extend(["--hits", hits.to_str().unwrap()].map(String::from));
-        let mut cmd = cltrace(&w.input, &args);
-        cmd.env("CLTRACE_DEVICE", intel)
-            .env_remove("CL_CONFIG_USE_VECTORIZER");
-        succeeded(&run(cmd));
+        succeeded(&run(on_intel_as_users_have_it(&w.input, &args)));
         records.push(read_hits(&hits));
     }
     for (i, (cpu, cl)) in records[0].iter().zip(&records[1]).enumerate() {
@@ -477,8 +485,7 @@ fn intels_kernels_with_its_vectorizer_on_render_as_the_host_does() {
 /// vectorizer on, as users have it, its build log says each kernel was not vectorized.
 #[test]
 fn intels_vectorizer_packed_the_kernels_into_slower_simd_lanes() {
-    let intel = "Intel(R) OpenCL";
-    if !platform_installed(intel, "its vectorizer's verdicts are not checked") {
+    if !platform_installed(INTEL, "its vectorizer's verdicts are not checked") {
         return;
     }
     let w = Work::new();
@@ -486,14 +493,12 @@ fn intels_vectorizer_packed_the_kernels_into_slower_simd_lanes() {
     for shade in ["depth", "ao", "path"] {
         let mut args = render_args(&quad, &w.out(&format!("{shade}.png")), "cl-bvh");
         args.extend(["--shade", shade, "--spp", "2"].map(String::from));
-        let mut cmd = cltrace(&w.input, &args);
-        cmd.env("CLTRACE_DEVICE", intel)
-            .env("CLTRACE_KERNEL_CACHE", "off")
-            .env("CLTRACE_BUILD_LOG", "1")
-            .env_remove("CL_CONFIG_USE_VECTORIZER");
+        let mut cmd = on_intel_as_users_have_it(&w.input, &args);
+        cmd.env("CLTRACE_KERNEL_CACHE", "off")
+            .env("CLTRACE_BUILD_LOG", "1");
         let out = run(cmd);
         succeeded(&out);
-        let log = String::from_utf8_lossy(&out.stderr);
+        let log = text(&out.stderr);
         let verdicts: Vec<&str> = log.lines().filter(|l| l.starts_with("Kernel \"")).collect();
         assert!(
             !verdicts.is_empty(),

@@ -585,7 +585,8 @@ fn render_with(
     }
     if let Some(s) = &renderers[0].bvh {
         v.detail(format!(
-            "bvh: {} builder, {} nodes, {} leaves, depth {}, mean leaf {:.2}, SAH cost {:.2}, {} threads",
+            "bvh: {} builder, {} nodes, {} leaves, depth {}, mean leaf {:.2}, SAH cost {:.2}, \
+             {} threads",
             req.build.builder.for_triangles(s.triangles).name(),
             s.nodes,
             s.leaves,

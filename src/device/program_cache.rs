@@ -1,9 +1,9 @@
 //! Compiled programs kept between runs, so that a second render does not compile: one file
 //! per program in the user's cache folder, named by a hash of everything the binary
 //! depends on (cltrace's version, the device, its driver and OpenCL C version, the
-//! drivers' compiler settings in the environment, the build options and the source). An entry holds that key in full and a checksum of itself, so a
-//! hash collision, a truncated or a corrupt file reads as a miss and is rebuilt; entries
-//! are written atomically. The cache is an optimisation: no failure of it fails a render.
+//! drivers' compiler settings in the environment, the build options and the source). An
+//! entry holds that key in full and a checksum of itself, so a hash collision, a truncated
+//! or a corrupt file reads as a miss and is rebuilt; entries are written atomically. The cache is an optimisation: no failure of it fails a render.
 
 use crate::hash::fnv1a;
 use std::ffi::OsString;
