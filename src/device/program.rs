@@ -232,10 +232,10 @@ fn surface_defines(features: SurfaceFeatures, kind: DeviceKind) -> Vec<String> {
 /// brute-force (`brute`) programs holding a sample kernel are built unoptimized. Optimized
 /// by NVIDIA's compiler (driver 580.159.04, on an H100), the brute-force path program's
 /// loop never ended, and once made to end it gave other samples than every layout's
-/// program; unoptimized, it gives theirs to the bit. Whether the compiler is at fault or exploits undefined behaviour that no
-/// other compiler does is not known: Oclgrind finds none
-/// (docs/bench/2026-12-05-nvidia-brute-force.md). Brute force is the reference, not the
-/// fast method.
+/// program; unoptimized, it gives theirs to the bit. Whether the compiler is at fault or
+/// exploits undefined behaviour that no other compiler does is not known: Oclgrind finds
+/// none (docs/bench/2026-12-05-nvidia-brute-force.md). Brute force is the reference, not
+/// the fast method.
 fn nv_options(kernels: Kernels, brute: bool) -> String {
     let mut options = String::new();
     if kernels.only_sampling() {

@@ -3,7 +3,8 @@
 //! depends on (cltrace's version, the device, its driver and OpenCL C version, the
 //! drivers' compiler settings in the environment, the build options and the source). An
 //! entry holds that key in full and a checksum of itself, so a hash collision, a truncated
-//! or a corrupt file reads as a miss and is rebuilt; entries are written atomically. The cache is an optimisation: no failure of it fails a render.
+//! or a corrupt file reads as a miss and is rebuilt; entries are written atomically. The
+//! cache is an optimisation: no failure of it fails a render.
 
 use crate::hash::fnv1a;
 use std::ffi::OsString;
