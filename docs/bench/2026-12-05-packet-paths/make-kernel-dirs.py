@@ -5,7 +5,9 @@ sample_path), packet-4 and packet-16 (the same 4 and 16 lanes wide), packet-bsdf
 and packet-lane-part-twice (its vector BSDF work, or its per-lane surface point and
 emitter pick, done twice), movemask and ordered-leaves (cl/wide.cl variants),
 ray-setup-twice (every traversal's ray constants computed twice) and vector-divisions
-(their six divisions as two vector ones). Usage: make-kernel-dirs.py CL_DIR OUT_DIR"""
+(their six divisions as two vector ones), shuffle (the watertight test's axis picks as
+one shuffle a vertex) and shuffle-movemask (both); each of the traversal variants also
+with a "-noinline" twin whose trace is a function of its own, for cachegrind's counts. Usage: make-kernel-dirs.py CL_DIR OUT_DIR"""
 import os, shutil, subprocess, sys
 here = os.path.dirname(os.path.abspath(__file__))
 cl, out = sys.argv[1], sys.argv[2]
@@ -34,6 +36,20 @@ shutil.copy(p, os.path.join(d3, "integrator.cl"))
 patch(d3, "packet-lane-part-twice.diff")
 patch(copy("ray-setup-twice"), "ray-setup-twice.diff")
 patch(copy("vector-divisions"), "vector-divisions.diff")
+patch(copy("shuffle"), "intersect-shuffle.diff")
+d4 = copy("shuffle-movemask")
+patch(d4, "intersect-shuffle.diff")
+patch(d4, "wide-movemask.diff")
+for name in ("main", "movemask", "ordered-leaves", "vector-divisions", "shuffle", "shuffle-movemask"):
+    src = cl if name == "main" else os.path.join(out, name)
+    d = os.path.join(out, name + "-noinline")
+    shutil.rmtree(d, ignore_errors=True)
+    shutil.copytree(src, d)
+    w = os.path.join(d, "wide.cl")
+    t = open(w).read()
+    old = "FORCE_INLINE uint trace(SCENE_PARAMS"
+    assert old in t
+    open(w, "w").write(t.replace(old, "__attribute__((noinline)) uint trace(SCENE_PARAMS"))
 # The packet kernel 4 and 16 lanes wide: its vector types renamed.
 import re
 for n in (4, 16):
