@@ -6,7 +6,8 @@ and packet-lane-part-twice (its vector BSDF work, or its per-lane surface point 
 emitter pick, done twice), movemask and ordered-leaves (cl/wide.cl variants),
 ray-setup-twice (every traversal's ray constants computed twice) and vector-divisions
 (their six divisions as two vector ones), shuffle (the watertight test's axis picks as
-one shuffle a vertex) and shuffle-movemask (both); each of the traversal variants also
+one shuffle a vertex) and shuffle-movemask (both), select (the picks as
+two branch-free selects of a vector per vertex); each of the traversal variants also
 with a "-noinline" twin whose trace is a function of its own, for cachegrind's counts. Usage: make-kernel-dirs.py CL_DIR OUT_DIR"""
 import os, shutil, subprocess, sys
 here = os.path.dirname(os.path.abspath(__file__))
@@ -37,6 +38,7 @@ patch(d3, "packet-lane-part-twice.diff")
 patch(copy("ray-setup-twice"), "ray-setup-twice.diff")
 patch(copy("vector-divisions"), "vector-divisions.diff")
 patch(copy("shuffle"), "intersect-shuffle.diff")
+patch(copy("select"), "intersect-select.diff")
 d4 = copy("shuffle-movemask")
 patch(d4, "intersect-shuffle.diff")
 patch(d4, "wide-movemask.diff")
