@@ -7,15 +7,22 @@ FORCE_INLINE float pick(float3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y :
 
 /* Per-ray constants of the watertight ray/triangle test (Woop, Benthin, Wald 2013):
  * kz is the dominant axis of the direction, (kx, ky) the other two in an order that keeps
- * the winding, and the shear maps the ray onto +z. The axes are kept as lane masks (lanes
- * x, y, z for kx, ky, kz): is_x set where the axis is x, is_y where it is y, neither
- * for z. A vertex is then permuted by two selects rather than picked coordinate by
- * coordinate: the same numbers, without branches; Intel's CPU runtime ran the gold and
- * glass scenes 1.11-1.12x faster, PoCL and an H100 level
- * (docs/bench/2026-12-06-axis-selects.md). */
+ * the winding, and the shear maps the ray onto +z.
+ *
+ * The triangle test reads each vertex's coordinates in the order (kx, ky, kz), in one of
+ * two forms that give the same numbers (the host picks by device, src/device/program.rs):
+ * by default the axes are two lane masks (lanes x, y, z for kx, ky, kz; is_x set where
+ * the axis is x, is_y where it is y) and two selects permute a whole vertex, which ran
+ * the gold and glass scenes 1.11-1.12x faster on Intel's CPU runtime and PoCL level
+ * to 1.06x; AXIS_PICKS (GPUs) keeps the axes as numbers and picks coordinate by coordinate,
+ * as the selects cost an H200 1-4% (docs/bench/2026-12-06-axis-selects.md). */
 typedef struct {
     float3 org;
+#ifdef AXIS_PICKS
+    int kx, ky, kz;
+#else
     int4 is_x, is_y;
+#endif
     float sx, sy, sz;
 } WatertightRay;
 
@@ -28,9 +35,13 @@ FORCE_INLINE WatertightRay watertight_ray(float3 org, float3 dir) {
     float dz = pick(dir, kz);
     if (dz < 0.0f) { int swap = kx; kx = ky; ky = swap; }
     r.org = org;
+#ifdef AXIS_PICKS
+    r.kx = kx; r.ky = ky; r.kz = kz;
+#else
     int4 k = (int4)(kx, ky, kz, 2);
     r.is_x = k == 0;
     r.is_y = k == 1;
+#endif
     r.sx = pick(dir, kx) / dz;
     r.sy = pick(dir, ky) / dz;
     r.sz = 1.0f / dz;
@@ -39,7 +50,11 @@ FORCE_INLINE WatertightRay watertight_ray(float3 org, float3 dir) {
 
 /* (v[kx], v[ky], v[kz]) of the ray r in lanes x, y, z. */
 FORCE_INLINE float4 permute(const WatertightRay* r, float3 v) {
+#ifdef AXIS_PICKS
+    return (float4)(pick(v, r->kx), pick(v, r->ky), pick(v, r->kz), 0.0f);
+#else
     return select(select((float4)(v.z), (float4)(v.y), r->is_y), (float4)(v.x), r->is_x);
+#endif
 }
 
 /* The watertight test's edge functions of triangle (v0, v1, v2) for the ray (u, v, w: the

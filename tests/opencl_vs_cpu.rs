@@ -6,7 +6,9 @@
 //! [`device_frames_match`] over the OpenCL tracers (`DeviceTracer`), and the ray-buffer
 //! tests ask every tracer on both sides the same rays.
 
-use crate::common::tracers::{DeviceTracer, Ties, check_every_device, check_host, in_file_order};
+use crate::common::tracers::{
+    DeviceTracer, Ties, check_device, check_every_device, check_host, in_file_order,
+};
 use crate::common::*;
 use cltrace::bvh::Bin32Bvh;
 use cltrace::bvh::Layout;
@@ -369,18 +371,7 @@ fn ray_buffers_match_the_host_for_closest_and_any_hits() {
         seed: 5,
     });
     let triangles = in_file_order(&mesh);
-    let mut state = 12345u32;
-    let mut unit = move || {
-        state = state.wrapping_mul(1664525).wrapping_add(1013904223);
-        (state >> 8) as f32 / (1u32 << 24) as f32
-    };
-    let rays: Vec<Ray> = (0..4000)
-        .map(|_| {
-            let o = Vec3::new(unit(), unit(), unit()) * 2.0 - 0.5;
-            let d = Vec3::new(unit(), unit(), unit()) - 0.5;
-            Ray::new(o, if d.length() > 1e-3 { d } else { Vec3::X })
-        })
-        .collect();
+    let rays = random_rays(4000, 12345);
     let question = (0.7, Ties::None);
     let brute = cltrace::brute::BruteForce {
         triangles: triangles.clone(),
@@ -401,6 +392,55 @@ fn ray_buffers_match_the_host_for_closest_and_any_hits() {
             hits > 200 && hits < 3800,
             "the rays should both hit and miss ({hits} hits)"
         );
+    }
+}
+
+/// `count` rays from around the unit cube in random directions (every dominant axis, both
+/// ways), from the stream `seed`.
+fn random_rays(count: usize, seed: u32) -> Vec<Ray> {
+    let mut state = seed;
+    let mut unit = move || {
+        state = state.wrapping_mul(1664525).wrapping_add(1013904223);
+        (state >> 8) as f32 / (1u32 << 24) as f32
+    };
+    (0..count)
+        .map(|_| {
+            let o = Vec3::new(unit(), unit(), unit()) * 2.0 - 0.5;
+            let d = Vec3::new(unit(), unit(), unit()) - 0.5;
+            Ray::new(o, if d.length() > 1e-3 { d } else { Vec3::X })
+        })
+        .collect()
+}
+
+/// The triangle test reads a vertex's coordinates along the ray's axes in one of two forms
+/// (cl/intersect.cl): GPUs pick them one at a time (`AXIS_PICKS`), other devices permute
+/// the vertex by selects. Every device runs its own form in the other tests; here it also
+/// runs the picks, on every tracer, against brute force on the host.
+#[test]
+fn the_triangle_tests_picked_axes_match_the_host() {
+    let mesh = generate(Generator::Soup {
+        triangles: 2000,
+        seed: 6,
+    });
+    let triangles = in_file_order(&mesh);
+    let rays = random_rays(3000, 777);
+    let question = (0.7, Ties::None);
+    let brute = cltrace::brute::BruteForce {
+        triangles: triangles.clone(),
+    };
+    check_host("cpu-brute", &brute, &rays, question, &triangles).unwrap();
+    for device in devices() {
+        for tracer in DeviceTracer::all() {
+            let options = BuildOptions::default();
+            let mut cl = tracer.prepare_built_with(device, &mesh, &options, "-D AXIS_PICKS");
+            let what = format!("{} on {}, AXIS_PICKS", tracer.name(), label(&device.info));
+            let hits = check_device(&what, &mut cl, &rays, question, &triangles)
+                .unwrap_or_else(|e| panic!("{e}"));
+            assert!(
+                hits > 100 && hits < 2900,
+                "{what}: {hits} hits of 3000 rays"
+            );
+        }
     }
 }
 

@@ -249,6 +249,17 @@ fn nv_options(kernels: Kernels, brute: bool) -> String {
     options
 }
 
+/// The defines every program takes on a device of `kind`: GPUs read the triangle test's
+/// vertex coordinates one pick at a time (`AXIS_PICKS`), other devices permute a vertex by
+/// two selects. Both give the same numbers; the selects ran 1.11-1.12x faster on Intel's CPU
+/// runtime and cost an H200 1-4% (cl/intersect.cl, docs/bench/2026-12-06-axis-selects.md).
+fn device_defines(kind: DeviceKind) -> Vec<String> {
+    match kind {
+        DeviceKind::Gpu => vec!["AXIS_PICKS".into()],
+        DeviceKind::Cpu | DeviceKind::Accelerator | DeviceKind::Other => Vec::new(),
+    }
+}
+
 /// Whether a program of `kernels` on a device of `kind` asks for correctly rounded division
 /// and square root, as the host computes them. Progressive samples are held to the host's
 /// within a tolerance, not to the bit (tests/secondary.rs, tests/surfaces.rs), and on GPUs
@@ -426,6 +437,7 @@ impl ClDevice {
             None => Vec::new(),
         };
         defines.extend(surface_defines(features, self.info.kind));
+        defines.extend(device_defines(self.info.kind));
         defines.extend(kernels.defines());
         if relaxes_shading(kernels) {
             defines.push("RELAXED_SHADING".into());
@@ -758,6 +770,20 @@ mod tests {
                 );
             }
             assert!(!has(one(true, true, false), "LOCKSTEP_SHADOW"));
+        }
+    }
+
+    /// GPUs alone take the triangle test's picks; every other device its selects.
+    #[test]
+    fn only_gpus_pick_the_triangle_tests_axes() {
+        for kind in [
+            DeviceKind::Gpu,
+            DeviceKind::Cpu,
+            DeviceKind::Accelerator,
+            DeviceKind::Other,
+        ] {
+            let picks = device_defines(kind).contains(&"AXIS_PICKS".to_string());
+            assert_eq!(picks, kind == DeviceKind::Gpu, "{kind:?}");
         }
     }
 

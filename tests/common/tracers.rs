@@ -49,18 +49,36 @@ impl DeviceTracer {
         mesh: &Mesh,
         options: &BuildOptions,
     ) -> ClTracer<'d> {
+        self.prepare_built_with(device, mesh, options, "")
+    }
+
+    /// [`DeviceTracer::prepare`] with `build_options` after cltrace's own (`-D NAME`: a
+    /// kernel form another kind of device takes).
+    pub fn prepare_built_with<'d>(
+        self,
+        device: &'d ClDevice,
+        mesh: &Mesh,
+        options: &BuildOptions,
+        build_options: &str,
+    ) -> ClTracer<'d> {
         match self {
             DeviceTracer::Brute => {
-                let program = ClTracer::compile_brute(device).unwrap();
+                let program = device
+                    .compile_program(None, Kernels::TRACING, build_options)
+                    .unwrap();
                 ClTracer::brute(device, &program, &in_file_order(mesh)).unwrap()
             }
             DeviceTracer::Bvh(layout) => {
                 let bvh = Bvh::build(mesh, options);
                 let sah = bvh.stats().sah_cost;
                 let laid = DeviceLayout::new(Bin32Bvh::new(bvh, mesh), layout, sah);
-                let program =
-                    ClTracer::compile(device, Some((layout, laid.stack_size)), Kernels::TRACING)
-                        .unwrap();
+                let program = device
+                    .compile_program(
+                        Some((layout, laid.stack_size)),
+                        Kernels::TRACING,
+                        build_options,
+                    )
+                    .unwrap();
                 ClTracer::with_layout(device, &program, &laid).unwrap()
             }
         }
