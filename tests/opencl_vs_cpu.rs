@@ -425,10 +425,6 @@ fn the_triangle_tests_picked_axes_match_the_host() {
     let triangles = in_file_order(&mesh);
     let rays = random_rays(3000, 777);
     let question = (0.7, Ties::None);
-    let brute = cltrace::brute::BruteForce {
-        triangles: triangles.clone(),
-    };
-    check_host("cpu-brute", &brute, &rays, question, &triangles).unwrap();
     for device in devices() {
         for tracer in DeviceTracer::all() {
             let options = BuildOptions::default();
