@@ -288,6 +288,20 @@ fn thin_dielectric_pane_regions_match_mitsuba() {
     regions_match_mitsuba("pane");
 }
 
+// The same materials in a closed room: the Cornell box with a closed faceted sphere in
+// place of its white box (compare.py's `cornell_sphere_scene`), where paths bounce between
+// the sphere and the walls instead of leaving the scene.
+
+#[test]
+fn rough_gold_sphere_in_the_cornell_box_regions_match_mitsuba() {
+    regions_match_mitsuba("cornell-gold");
+}
+
+#[test]
+fn smooth_glass_sphere_in_the_cornell_box_regions_match_mitsuba() {
+    regions_match_mitsuba("cornell-glass");
+}
+
 // The lights other than emitting surfaces (issue 17): an environment map, a constant
 // environment colour, point, spot and directional lights, in scenes without an emitting
 // surface (compare.py's `env_scene` to `directional_scene`). Ignored until the renderer reads

@@ -246,6 +246,28 @@ def rough_plastic_split_scene():
     )
 
 
+def cornell_sphere_scene(name, sphere_material, doc, max_bounces=8):
+    """The Cornell box with a closed faceted sphere of another material in place of the
+    white box: a room, where every path stays in view of the walls and the light, rather
+    than the material scenes' open floor, where most paths leave the scene early."""
+    scene = cornell()
+    objects = [o for o in scene["objects"] if o["name"] != "box"]
+    sphere = uv_sphere((0.3, 0.45, -0.3), 0.45, 16, 10, closed=True)
+    objects.insert(-1, obj("sphere", sphere_material, sphere, shared=True))
+    return {**scene, "name": name, "doc": doc, "objects": objects, "max_bounces": max_bounces}
+
+
+def cornell_gold_scene():
+    m = material((1, 1, 1), bsdf={"type": "conductor", "roughness": 0.5, **GOLD})
+    return cornell_sphere_scene("cornell-gold", m, "the Cornell box with a rough gold sphere (GGX, roughness 0.5)")
+
+
+def cornell_glass_scene():
+    m = material((1, 1, 1), bsdf={"type": "dielectric", "roughness": 0.0, "ior": 1.5})
+    return cornell_sphere_scene("cornell-glass", m, "the Cornell box with a smooth glass sphere, ior 1.5",
+                                max_bounces=24)
+
+
 def pane_scene():
     """The diffuse sphere (closed) on the floor under the emitter, and in front of its left
     half a thin dielectric pane (ior 1.5), leaning back by 20 degrees, its front face towards
@@ -486,6 +508,8 @@ SCENES = {
         rough_plastic_scene,
         rough_plastic_split_scene,
         pane_scene,
+        cornell_gold_scene,
+        cornell_glass_scene,
         env_scene,
         background_scene,
         point_scene,
