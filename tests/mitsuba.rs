@@ -289,8 +289,8 @@ fn thin_dielectric_pane_regions_match_mitsuba() {
 }
 
 // The same materials in a closed room: the Cornell box with a closed faceted sphere in
-// place of its white box (compare.py's `cornell_sphere_scene`), where paths bounce between
-// the sphere and the walls instead of leaving the scene.
+// place of its white box (compare.py's `cornell_sphere_scene`), where most paths bounce
+// between the sphere and the walls instead of leaving the scene.
 
 #[test]
 fn rough_gold_sphere_in_the_cornell_box_regions_match_mitsuba() {

@@ -248,8 +248,9 @@ def rough_plastic_split_scene():
 
 def cornell_sphere_scene(name, sphere_material, doc, max_bounces=8):
     """The Cornell box with a closed faceted sphere of another material in place of the
-    white box: a room, where every path stays in view of the walls and the light, rather
-    than the material scenes' open floor, where most paths leave the scene early."""
+    white box: a room, open only towards the camera, where most paths keep bouncing
+    between the walls, the sphere and the light, rather than the material scenes' open
+    floor, where most paths leave the scene early."""
     scene = cornell()
     objects = [o for o in scene["objects"] if o["name"] != "box"]
     sphere = uv_sphere((0.3, 0.45, -0.3), 0.45, 16, 10, closed=True)
