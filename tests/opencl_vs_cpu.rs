@@ -6,9 +6,7 @@
 //! [`device_frames_match`] over the OpenCL tracers (`DeviceTracer`), and the ray-buffer
 //! tests ask every tracer on both sides the same rays.
 
-use crate::common::tracers::{
-    DeviceTracer, Ties, check_device, check_every_device, check_host, in_file_order,
-};
+use crate::common::tracers::{DeviceTracer, Ties, check_every_device, check_host, in_file_order};
 use crate::common::*;
 use cltrace::bvh::Bin32Bvh;
 use cltrace::bvh::Layout;
@@ -383,7 +381,7 @@ fn ray_buffers_match_the_host_for_closest_and_any_hits() {
     ];
     for device in devices() {
         results.extend(check_every_device(
-            device, &mesh, &rays, question, &triangles,
+            device, &mesh, &rays, question, &triangles, "",
         ));
     }
     for hits in results {
@@ -426,16 +424,11 @@ fn the_triangle_tests_picked_axes_match_the_host() {
     let rays = random_rays(3000, 777);
     let question = (0.7, Ties::None);
     for device in devices() {
-        for tracer in DeviceTracer::all() {
-            let options = BuildOptions::default();
-            let mut cl = tracer.prepare_built_with(device, &mesh, &options, "-D AXIS_PICKS");
-            let what = format!("{} on {}, AXIS_PICKS", tracer.name(), label(&device.info));
-            let hits = check_device(&what, &mut cl, &rays, question, &triangles)
-                .unwrap_or_else(|e| panic!("{e}"));
-            assert!(
-                hits > 100 && hits < 2900,
-                "{what}: {hits} hits of 3000 rays"
-            );
+        let results =
+            check_every_device(device, &mesh, &rays, question, &triangles, "-D AXIS_PICKS");
+        for hits in results {
+            let hits = hits.unwrap_or_else(|e| panic!("{e}"));
+            assert!(hits > 100 && hits < 2900, "{hits} hits of 3000 rays");
         }
     }
 }
@@ -473,7 +466,7 @@ fn rays_along_box_faces_match_brute_force() {
     let mut results = vec![check_host("cpu-bvh", &flat, &rays, question, &triangles)];
     for device in devices() {
         results.extend(check_every_device(
-            device, &mesh, &rays, question, &triangles,
+            device, &mesh, &rays, question, &triangles, "",
         ));
     }
     for hits in results {

@@ -275,19 +275,26 @@ pub fn agrees_with_brute_force<T: ClosestHit>(what: &str, make: impl Fn(&Mesh) -
 }
 
 /// [`check_device`] on every device tracer ([`DeviceTracer::all`]) of `mesh` on `device`,
-/// each named after its tracer and the device.
+/// its kernels built with `build_options` after cltrace's own (see
+/// [`DeviceTracer::prepare_built_with`]), each named after its tracer, the device and the
+/// options.
 pub fn check_every_device(
     device: &ClDevice,
     mesh: &Mesh,
     rays: &[Ray],
     question: (f32, Ties),
     triangles: &[Triangle],
+    build_options: &str,
 ) -> Vec<Result<usize, String>> {
     DeviceTracer::all()
         .into_iter()
         .map(|tracer| {
-            let mut cl = tracer.prepare(device, mesh, &BuildOptions::default());
-            let what = format!("{} on {}", tracer.name(), label(&device.info));
+            let mut cl =
+                tracer.prepare_built_with(device, mesh, &BuildOptions::default(), build_options);
+            let mut what = format!("{} on {}", tracer.name(), label(&device.info));
+            if !build_options.is_empty() {
+                what += &format!(", {build_options}");
+            }
             check_device(&what, &mut cl, rays, question, triangles)
         })
         .collect()
