@@ -1,0 +1,14 @@
+#!/bin/bash
+# The glass scene's framings on the GPU with the cwbvh and wide4 layouts beside bin64's (run23).
+# Run from the repository root with the staging folder .gpu/ carried to the device (main's binary as
+# .gpu/cltrace.xz, Mitsuba's wheels unpacked as .gpu/site.tar.xz); .gpu/frames.py is gpu-framings.py here.
+set -u
+REPO=$PWD; OUT=${OUT:-/tmp/out}; mkdir -p $OUT
+mkdir -p target/release
+xz -dc .gpu/cltrace.xz > target/release/cltrace; chmod +x target/release/cltrace
+nvidia-smi --query-gpu=name,driver_version,clocks.max.sm --format=csv,noheader | tee $OUT/gpu.txt
+(cd /tmp && tar -xJf $REPO/.gpu/site.tar.xz)
+for L in cwbvh bin64; do
+  echo "== layout $L"
+  PYTHONPATH=/tmp/site ROUNDS=2 EXTRA="--layout $L" timeout 250 python3 .gpu/frames.py glass,gold 2>&1 | grep -v Warn | grep "^|"
+done | tee $OUT/layouts.txt
