@@ -1,13 +1,13 @@
 """Item 1 by camera framing (docs/bench/2026-12-06-framings.md). Alternated rounds: Mitsuba llvm_ad_rgb, cltrace on Intel's runtime (0:0) and on PoCL (1:0),
 on compare.py's gold and glass scenes under four camera framings, Msamples/s per round."""
 import sys, os, json, time, subprocess
-sys.path.insert(0, "/work/main/scripts/mitsuba")
+sys.path.insert(0, os.path.join(os.getcwd(), "scripts/mitsuba"))  # run from the repository root
 import compare as C
 import numpy as np
 mi = C.mitsuba("llvm_ad_rgb")
 import drjit as dr
-W = H = 512; SPP = 64; ROUNDS = int(os.environ.get("ROUNDS", 4))
-CL = os.environ.get("CL", "/work/main/target/release/cltrace")
+W = H = int(os.environ.get("SIZE", 512)); SPP = int(os.environ.get("SPP", 64)); ROUNDS = int(os.environ.get("ROUNDS", 4))
+CL = os.environ.get("CL", os.path.join(os.getcwd(), "target/release/cltrace"))
 views = {
     "open": None,
     "away": {"eye": (0.0, 1.3, 2.6), "look_at": (0.0, 1.3, 10.0), "up": (0, 1, 0), "fov": 40.0},
@@ -21,7 +21,7 @@ for name in names:
         scene = C.SCENES[name]()
         scene["max_bounces"] = 8
         if cam: scene["camera"] = cam
-        out = f"/tmp/cost/{name}-{view}"
+        out = f"/tmp/framings/{name}-{view}"
         C.write_inputs(scene, out, W, H, SPP)
         loaded = C.mitsuba_scene(mi, scene, out, W, H, SPP, 8, C.RR_DEPTH_OF_CLTRACE)
         cases.append((name, view, out, loaded))
