@@ -243,6 +243,34 @@ fn a_mesh_used_by_two_nodes_is_drawn_twice_and_a_glb_reads_the_same() {
     );
 }
 
+/// Bytes after the length a GLB's header gives are not the file's. gltf 1.4.1 read them as
+/// a binary chunk where the GLB has none (its buffer in a data URI) and refused the file
+/// (gltf-rs/gltf#475).
+#[test]
+fn a_glb_followed_by_other_bytes_was_refused() {
+    let mut g = Gltf::default();
+    let meshes = triangle(&mut g, None);
+    let rest = json!({"scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}], "meshes": meshes});
+    let dir = tempfile::tempdir().unwrap();
+    let mut json = g.embedded(rest);
+    let gltf = load(&write(dir.path(), "triangle.gltf", &json));
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let mut json_only = Vec::new();
+    json_only.extend_from_slice(b"glTF");
+    json_only.extend_from_slice(&2u32.to_le_bytes());
+    json_only.extend_from_slice(&(12 + 8 + json.len() as u32).to_le_bytes());
+    json_only.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    json_only.extend_from_slice(b"JSON");
+    json_only.extend_from_slice(&json);
+    let plain = load(&write(dir.path(), "json_only.glb", &json_only));
+    assert_eq!(plain.mesh, gltf.mesh);
+    json_only.extend_from_slice(&[0xFF; 5]);
+    let padded = load(&write(dir.path(), "padded.glb", &json_only));
+    assert_eq!(padded.mesh, gltf.mesh);
+}
+
 #[test]
 fn strips_fans_and_unindexed_primitives_become_triangles() {
     let mut g = Gltf::default();
@@ -503,7 +531,12 @@ fn bad_gltf_is_one_clear_line() {
     let e = refused(&write(d, "not_json.gltf", "{\"asset\": "));
     assert!(e.contains("JSON"), "{e}");
     let e = refused(&write(d, "truncated.glb", &g.glb(base.clone())[..40]));
-    assert!(e.contains("GLB"), "{e}");
+    assert!(e.contains("GLB") && e.contains("cut short"), "{e}");
+    // A header whose length is shorter than the header: gltf 1.4.1 subtracted it unchecked.
+    let mut short = g.glb(base.clone());
+    short[8..12].copy_from_slice(&4u32.to_le_bytes());
+    let e = refused(&write(d, "short_header.glb", short));
+    assert!(e.contains("length of 4 bytes"), "{e}");
 
     // A buffer file that is not there, and one shorter than it says.
     let doc = g.document(base.clone(), Some("nowhere.bin".into()));

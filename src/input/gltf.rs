@@ -43,6 +43,7 @@ pub(super) fn parse(
     folder: Option<&Path>,
     read_materials: bool,
 ) -> Result<MeshFile> {
+    let bytes = glb_extent(path, bytes)?;
     let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| describe(path, e))?;
     let blob = gltf.blob.clone();
     let root = gltf.document.into_json();
@@ -99,6 +100,38 @@ fn validate(path: &Path, root: &json::Root) -> Result<()> {
         true => Ok(()),
         false => Err(describe(path, gltf::Error::Validation(errors))),
     }
+}
+
+/// The size of a GLB file's header: magic, version and the file's length, 4 bytes each.
+const GLB_HEADER: usize = 12;
+
+/// A GLB file's bytes up to the length its header gives, which the format makes the file's
+/// length; other bytes (a `.gltf`'s JSON) as they are. gltf 1.4.1 subtracts the header's
+/// size from that length unchecked (a panic where overflow is checked, found by fuzzing)
+/// and reads chunks past it, refusing files with bytes after the GLB (gltf-rs/gltf#475).
+fn glb_extent<'a>(path: &Path, bytes: &'a [u8]) -> Result<&'a [u8]> {
+    if bytes.len() < GLB_HEADER || !bytes.starts_with(b"glTF") {
+        return Ok(bytes);
+    }
+    let length = u32::from_le_bytes(bytes[8..12].try_into().expect("four bytes")) as usize;
+    if length < GLB_HEADER {
+        return Err(Error::input(
+            path,
+            format!(
+                "not a valid GLB file: its header gives a length of {length} bytes, shorter than the {GLB_HEADER}-byte header"
+            ),
+        ));
+    }
+    if length > bytes.len() {
+        return Err(Error::input(
+            path,
+            format!(
+                "not a valid GLB file: its header gives a length of {length} bytes, but the file holds {} (cut short?)",
+                bytes.len()
+            ),
+        ));
+    }
+    Ok(&bytes[..length])
 }
 
 /// One line for the crate's error: what failed to parse, or the first invalid item.
