@@ -113,7 +113,7 @@ fn glb_extent<'a>(path: &Path, bytes: &'a [u8]) -> Result<&'a [u8]> {
     if bytes.len() < GLB_HEADER || !bytes.starts_with(b"glTF") {
         return Ok(bytes);
     }
-    let length = u32::from_le_bytes(bytes[8..12].try_into().expect("four bytes")) as usize;
+    let length = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize;
     if length < GLB_HEADER {
         return Err(Error::input(
             path,
