@@ -93,27 +93,34 @@ impl Gltf {
 
     /// A `.glb`: header, JSON chunk, binary chunk.
     fn glb(&self, rest: Value) -> Vec<u8> {
-        let mut json = self.document(rest, None).to_string().into_bytes();
-        while !json.len().is_multiple_of(4) {
-            json.push(b' ');
-        }
-        let mut bin = self.bin.clone();
+        let json = self.document(rest, None).to_string().into_bytes();
+        glb_bytes(json, Some(self.bin.clone()))
+    }
+}
+
+/// A GLB file of a JSON chunk and, if given, a binary chunk, each padded to 4 bytes.
+fn glb_bytes(mut json: Vec<u8>, bin: Option<Vec<u8>>) -> Vec<u8> {
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let mut chunks = Vec::new();
+    chunks.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    chunks.extend_from_slice(b"JSON");
+    chunks.extend_from_slice(&json);
+    if let Some(mut bin) = bin {
         while !bin.len().is_multiple_of(4) {
             bin.push(0);
         }
-        let total = 12 + 8 + json.len() + 8 + bin.len();
-        let mut out = Vec::new();
-        out.extend_from_slice(b"glTF");
-        out.extend_from_slice(&2u32.to_le_bytes());
-        out.extend_from_slice(&(total as u32).to_le_bytes());
-        out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"JSON");
-        out.extend_from_slice(&json);
-        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"BIN\0");
-        out.extend_from_slice(&bin);
-        out
+        chunks.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        chunks.extend_from_slice(b"BIN\0");
+        chunks.extend_from_slice(&bin);
     }
+    let mut out = Vec::new();
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&((12 + chunks.len()) as u32).to_le_bytes());
+    out.extend_from_slice(&chunks);
+    out
 }
 
 /// A PNG of `pixels` (RGBA, rows from the top), `width` wide.
@@ -252,18 +259,9 @@ fn a_glb_followed_by_other_bytes_was_refused() {
     let meshes = triangle(&mut g, None);
     let rest = json!({"scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}], "meshes": meshes});
     let dir = tempfile::tempdir().unwrap();
-    let mut json = g.embedded(rest);
+    let json = g.embedded(rest);
     let gltf = load(&write(dir.path(), "triangle.gltf", &json));
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
-    }
-    let mut json_only = Vec::new();
-    json_only.extend_from_slice(b"glTF");
-    json_only.extend_from_slice(&2u32.to_le_bytes());
-    json_only.extend_from_slice(&(12 + 8 + json.len() as u32).to_le_bytes());
-    json_only.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    json_only.extend_from_slice(b"JSON");
-    json_only.extend_from_slice(&json);
+    let mut json_only = glb_bytes(json, None);
     let plain = load(&write(dir.path(), "json_only.glb", &json_only));
     assert_eq!(plain.mesh, gltf.mesh);
     json_only.extend_from_slice(&[0xFF; 5]);
