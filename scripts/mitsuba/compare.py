@@ -1125,13 +1125,16 @@ RR_DEPTH_OF_CLTRACE = 4
 def cmd_speed(args):
     """Samples per second of both renderers on the same scenes at equal settings: image
     size, spp, path length, Russian roulette from the same vertex, box filter, one-sided
-    emitters. Mitsuba's time is mi.render's after a first render (its JIT compile) of the
-    same size and spp; cltrace's the samples stage of `render --json` (its `sampling_ms`)
-    after a first run (the kernel compile). Medians of --repetitions."""
+    emitters. Mitsuba's time is mi.render's; cltrace's the samples stage of `render --json`
+    (its `sampling_ms`). Each repetition renders the scene once with every renderer in
+    turn, so that a machine whose speed drifts (a shared host's does) moves them alike; the
+    first is a warm-up (Mitsuba's JIT compile, cltrace's kernel compile). Prints medians of
+    --repetitions, and each repetition's ratio to Mitsuba's time."""
     mi = mitsuba(args.variant)
     import drjit as dr
 
     w, h = parse_size(args.size)
+    devices = args.devices.split(",")
     rows = []
     for name in selected(args.scenes):
         scene = SCENES[name]()
@@ -1139,19 +1142,17 @@ def cmd_speed(args):
         out = os.path.join(args.out, name)
         write_inputs(scene, out, w, h, args.spp)
         loaded = mitsuba_scene(mi, scene, out, w, h, args.spp, args.max_bounces, RR_DEPTH_OF_CLTRACE)
-        times = []
+        mitsuba_times = []
+        cltrace_times = {device: [] for device in devices}
+        labels = {}
         for k in range(args.repetitions + 1):
             start = time.perf_counter()
             img = mi.render(loaded, spp=args.spp, seed=k)
             dr.eval(img)
             np.array(img)
             if k > 0:
-                times.append(time.perf_counter() - start)
-        samples = w * h * args.spp
-        rows.append((name, f"Mitsuba {mi.__version__} {args.variant}", samples / np.median(times) / 1e6))
-        for device in args.devices.split(","):
-            times = []
-            for k in range(args.repetitions + 1):
+                mitsuba_times.append(time.perf_counter() - start)
+            for device in devices:
                 summary = os.path.join(out, "run.json")
                 cmd = [args.cltrace, "render", os.path.join(out, "scene.toml"), "-q", "--device", device,
                        "--max-bounces", str(args.max_bounces), "-o", os.path.join(out, "speed.exr"),
@@ -1159,16 +1160,22 @@ def cmd_speed(args):
                 subprocess.run(cmd, check=True)
                 with open(summary) as f:
                     run = json.load(f)
+                labels[device] = f"cltrace {run['device']}"
                 if k > 0:
-                    times.append(run["sampling_ms"] / 1e3)
-            rows.append((name, f"cltrace {run['device']}", samples / np.median(times) / 1e6))
+                    cltrace_times[device].append(run["sampling_ms"] / 1e3)
+        samples = w * h * args.spp
+        rows.append((name, f"Mitsuba {mi.__version__} {args.variant}", samples / np.median(mitsuba_times) / 1e6, []))
+        for device in devices:
+            ratios = [m / c for m, c in zip(mitsuba_times, cltrace_times[device])]
+            rows.append((name, labels[device], samples / np.median(cltrace_times[device]) / 1e6, ratios))
     print(f"{w}x{h}, {args.spp} spp, {args.max_bounces} bounces ({args.max_bounces + 2} segments), "
-          f"Russian roulette after bounce 3, median of {args.repetitions}")
-    print("| scene | renderer | Msamples/s | of Mitsuba's |")
-    print("|---|---|---:|---:|")
-    for name, who, rate in rows:
-        base = next(r for n, wh, r in rows if n == name and wh.startswith("Mitsuba"))
-        print(f"| {name} | {who} | {rate:.3f} | {rate / base:.2f}x |")
+          f"Russian roulette after bounce 3, median of {args.repetitions}, renderers alternated")
+    print("| scene | renderer | Msamples/s | of Mitsuba's | each repetition |")
+    print("|---|---|---:|---:|---|")
+    for name, who, rate, ratios in rows:
+        base = next(r for n, wh, r, _ in rows if n == name and wh.startswith("Mitsuba"))
+        each = ", ".join(f"{r:.2f}" for r in ratios)
+        print(f"| {name} | {who} | {rate:.3f} | {rate / base:.2f}x | {each} |")
 
 
 def main():
