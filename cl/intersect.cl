@@ -15,11 +15,13 @@ FORCE_INLINE float pick(float3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y :
  * the axis is x, is_y where it is y) and two selects permute a whole vertex, which ran
  * the gold and glass scenes 1.11-1.12x faster on Intel's CPU runtime and PoCL level
  * to 1.06x; AXIS_PICKS (GPUs) keeps the axes as numbers and picks coordinate by coordinate,
- * as the selects cost an H200 1-4% (docs/bench/2026-12-06-axis-selects.md). */
+ * as the selects cost an H200 1-4% (docs/bench/2026-12-06-axis-selects.md). The three
+ * numbers share one uint, two bits each: as three ints they made an H100's camera,
+ * diffuse and path-traced rays 3-6% slower (docs/bench/2026-12-06-indexed-triangles.md). */
 typedef struct {
     float3 org;
 #ifdef AXIS_PICKS
-    int kx, ky, kz;
+    uint axes; /* kx in bits 0-1, ky in bits 2-3, kz in bits 4-5 */
 #else
     int4 is_x, is_y;
 #endif
@@ -36,7 +38,7 @@ FORCE_INLINE WatertightRay watertight_ray(float3 org, float3 dir) {
     if (dz < 0.0f) { int swap = kx; kx = ky; ky = swap; }
     r.org = org;
 #ifdef AXIS_PICKS
-    r.kx = kx; r.ky = ky; r.kz = kz;
+    r.axes = (uint)kx | ((uint)ky << 2) | ((uint)kz << 4);
 #else
     int4 k = (int4)(kx, ky, kz, 2);
     r.is_x = k == 0;
@@ -51,7 +53,8 @@ FORCE_INLINE WatertightRay watertight_ray(float3 org, float3 dir) {
 /* (v[kx], v[ky], v[kz]) of the ray r in lanes x, y, z. */
 FORCE_INLINE float4 permute(const WatertightRay* r, float3 v) {
 #ifdef AXIS_PICKS
-    return (float4)(pick(v, r->kx), pick(v, r->ky), pick(v, r->kz), 0.0f);
+    uint a = r->axes;
+    return (float4)(pick(v, (int)(a & 3u)), pick(v, (int)((a >> 2) & 3u)), pick(v, (int)((a >> 4) & 3u)), 0.0f);
 #else
     return select(select((float4)(v.z), (float4)(v.y), r->is_y), (float4)(v.x), r->is_x);
 #endif
