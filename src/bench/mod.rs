@@ -406,11 +406,11 @@ fn run_into(
                         })
                         .transpose()?;
                     // Path tracing renders as `render --shade path` does: the scene's
-                    // materials, smooth normals, the progressive kernels; emitters lit
+                    // materials, smooth normals, the program of PATH_KERNELS; emitters lit
                     // from their front face only, as the protocol compares renderers.
                     let mut path_timings = Timings::default();
                     let path_options = PrepareOptions {
-                        kernels: Kernels::PRIMARY.with(Kernel::SamplePath),
+                        kernels: PATH_KERNELS,
                         crease_angle: None,
                         lights: lights.clone(),
                         ..options.clone()
@@ -475,6 +475,13 @@ fn run_into(
     }
     Ok(())
 }
+
+/// The kernels of the path rows' program: the path kernel alone, as `render --shade path`
+/// compiles it. A program with another kernel beside it is compiled as the tracing
+/// programs are, without the sample programs' register cap, relaxed shading and rounding
+/// (src/device/program.rs): on an H100 it ran the path tracer at 78 registers instead of
+/// 64 (docs/bench/2026-12-06-indexed-triangles.md).
+const PATH_KERNELS: Kernels = Kernels::NONE.with(Kernel::SamplePath);
 
 /// The layouts a method is measured in: every requested one for `cl-bvh`, only the
 /// thesis's (the one they use) for the others.
@@ -1023,8 +1030,9 @@ fn targets(req: &BenchRequest) -> Result<Vec<Target>> {
 
 #[cfg(test)]
 mod tests {
-    use super::{Estimate, Growth, diffuse_rays, tile_order};
+    use super::{Estimate, Growth, PATH_KERNELS, diffuse_rays, tile_order};
     use crate::camera::Camera;
+    use crate::device::{Kernel, Kernels};
     use crate::mesh::Mesh;
     use glam::Vec3;
 
@@ -1097,5 +1105,13 @@ mod tests {
         let mut g = Growth::new(1.0);
         let e = g.estimate(1_000, 1_000_000, 1_500.0);
         assert_eq!(e, Some(Estimate::AtLeast(1.5)));
+    }
+
+    /// Regression: the path rows' program held `trace_primary` beside the path kernel, so
+    /// it was compiled as a tracing program, not as `render --shade path` compiles its own.
+    #[test]
+    fn bench_path_rows_compiled_the_path_kernel_as_a_tracing_program() {
+        assert!(PATH_KERNELS.only_sampling());
+        assert_eq!(PATH_KERNELS, Kernels::NONE.with(Kernel::SamplePath));
     }
 }
