@@ -26,7 +26,8 @@ FORCE_INLINE uint shade_hit(int mode, float near, float far, float3 n, float dis
 }
 
 /* Writes pixel (x, row) of the pitched output images, whose row 0 is the first image row of
- * the band being traced. Pitches count elements, not bytes. */
+ * the band being traced. Pitches count elements, not bytes. With colors null (a frame of
+ * hits alone, as the benchmark's closest-hit query asks) no colour is shaded or stored. */
 FORCE_INLINE void store_pixel(__global Hit* hits, uint hit_pitch, __global uint* colors, uint color_pitch,
                         uint x, uint row, uint best, float t, float3 dir, const __global Triangle* tris,
                         float3 n, int shade, float near, float far) {
@@ -39,8 +40,8 @@ FORCE_INLINE void store_pixel(__global Hit* hits, uint hit_pitch, __global uint*
         float distance = t * length3(dir);
         h.prim = tris[best].prim;
         h.t = distance;
-        color = shade_hit(shade, near, far, n, distance, dir);
+        if (colors != 0) color = shade_hit(shade, near, far, n, distance, dir);
     }
     hits[row * hit_pitch + x] = h;
-    colors[row * color_pitch + x] = color;
+    if (colors != 0) colors[row * color_pitch + x] = color;
 }

@@ -12,7 +12,8 @@
  * weights of the triangle's vertices 1 and 2 (0 for a miss), for version 2 of the hit
  * records. Without `general` every ray leaves from the eye and no barycentrics are
  * written: that code, though it would not run, costs PoCL 4-9% of primary-ray speed
- * (docs/bench/2026-12-04-primary-rays-pocl.md), so it is a kernel of its own. */
+ * (docs/bench/2026-12-04-primary-rays-pocl.md), so it is a kernel of its own. With colors
+ * null the frame is hits alone: no normal is fetched and no colour shaded (store_pixel). */
 #define PRIMARY_PARAMS SCENE_PARAMS, CAMERA_BAND_PARAMS,                 \
     int shade, float near, float far,                                   \
     __global Hit* hits, uint hit_pitch,                                 \
@@ -30,7 +31,7 @@ FORCE_INLINE void primary_pixel(PRIMARY_PARAMS, const bool general) {
     float t;
     uint best = trace(SCENE, org, dir, INFINITY, false, false, &t);
     float3 n = (float3)(0.0f);
-    if (best != MISS && shade != SHADE_DEPTH) {
+    if (best != MISS && shade != SHADE_DEPTH && colors != 0) {
         n = shading_normal(SURFACE, &tris[best], org, dir);
     }
     store_pixel(hits, hit_pitch, colors, color_pitch, x, y - row0, best, t, dir, tris, n, shade, near, far);

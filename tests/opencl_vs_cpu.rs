@@ -297,6 +297,48 @@ fn pixels_and_colours_agree_between_kernels_and_host() {
     });
 }
 
+#[test]
+fn a_frame_of_hits_alone_has_the_full_frames_hits_and_no_colours() {
+    // The benchmark's closest-hit query leaves the colour image out (colors null in the
+    // kernel): its hits are the full frame's on every layout, and on the host.
+    on_every_device(|device| {
+        let c = &cases()[4];
+        let full = ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds());
+        let bare = full.with_colors(false);
+        let (pinhole, w, h) = (c.camera.pinhole(), c.camera.width, c.camera.height);
+        let brute = cltrace::brute::BruteForce {
+            triangles: triangles_in_order(&c.mesh, 0..c.mesh.triangle_count() as u32),
+        };
+        let host_full = cpu::render(&brute, &pinhole, w, h, &full, None);
+        let host_bare = cpu::render(&brute, &pinhole, w, h, &bare, None);
+        assert!(
+            coverage(&host_full) > 0,
+            "{}: the camera sees nothing",
+            c.name
+        );
+        assert_eq!(host_bare.hits, host_full.hits, "host");
+        assert!(
+            host_bare.colors.iter().all(|&x| x == 0),
+            "host: a colour was shaded"
+        );
+        for tracer in DeviceTracer::layouts() {
+            let mut cl = tracer.prepare(device, &c.mesh, &BuildOptions::default());
+            let with = cl.render(&pinhole, w, h, &full, false).unwrap().0;
+            let without = cl.render(&pinhole, w, h, &bare, false).unwrap().0;
+            let name = tracer.name();
+            assert_eq!(without.hits, with.hits, "{name}: the hits changed");
+            assert!(
+                with.colors.iter().all(|&x| x != 0),
+                "{name}: a colour is missing"
+            );
+            assert!(
+                without.colors.iter().all(|&x| x == 0),
+                "{name}: a colour was stored"
+            );
+        }
+    });
+}
+
 /// The real meshes, when present: the BVH kernels of every layout against the CPU brute
 /// force.
 #[test]

@@ -37,7 +37,7 @@ use crate::report::{Progress, Timings, Verbosity};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum RayKind {
-    /// One closest-hit ray per pixel from the eye.
+    /// One closest-hit ray per pixel from the eye, writing its hit record alone.
     Primary,
     /// For each pixel whose primary ray hit, one closest-hit ray from the hit point (offset
     /// by 1e-4 of the scene radius along the normal turned to the eye) in a cosine-weighted
@@ -81,7 +81,9 @@ impl RayKind {
     /// One line on the kind, for `--help`.
     pub fn about(self) -> &'static str {
         match self {
-            RayKind::Primary => "One closest-hit ray per pixel from the eye",
+            RayKind::Primary => {
+                "One closest-hit ray per pixel from the eye (hit records only, no image)"
+            }
             RayKind::Diffuse => {
                 "For each pixel whose primary ray hit, one closest-hit ray from the hit point \
                  (offset by 1e-4 of the scene radius along the normal turned to the eye) in a \
@@ -596,7 +598,10 @@ fn measure(
     let (req, mesh) = (run.req, run.mesh);
     let (width, height) = run.size;
     let camera = Camera::bench(&mesh.bounds(), width, height)?;
-    let shade = ShadeParams::new(Shade::Lambert, &camera, &mesh.bounds());
+    // A closest-hit query writes hit records alone, as the peers' kernels and the ray-batch
+    // rows do: no colour is shaded or stored (4% of an H100's camera rays:
+    // docs/bench/2026-12-06-tenth-session.md).
+    let shade = ShadeParams::new(Shade::Lambert, &camera, &mesh.bounds()).with_colors(false);
     let (kind, rays) = match diffuse {
         Some((kind, batch)) => (kind, batch.len() as u64),
         None => (RayKind::Primary, width as u64 * height as u64),

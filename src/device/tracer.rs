@@ -1234,7 +1234,10 @@ impl<'d> ClTracer<'d> {
         let (w, h) = (width as usize, height as usize);
         let band_capacity = capacity::<Hit>(device, self.image_budget, w, h);
         let hits = PitchedBuffer::<Hit>::new(device, w, band_capacity)?;
-        let colors = PitchedBuffer::<u32>::new(device, w, band_capacity)?;
+        let colors = match shade.colors {
+            true => Some(PitchedBuffer::<u32>::new(device, w, band_capacity)?),
+            false => None,
+        };
         let barycentrics = match shade.barycentrics {
             true => Some(PitchedBuffer::<Float2>::new(device, w, band_capacity)?),
             false => None,
@@ -1255,8 +1258,8 @@ impl<'d> ClTracer<'d> {
             far: shade.far,
             hits: Some(&hits.buffer),
             hit_pitch: hits.pitch as u32,
-            colors: Some(&colors.buffer),
-            color_pitch: colors.pitch as u32,
+            colors: colors.as_ref().map(|c| &c.buffer),
+            color_pitch: colors.as_ref().map_or(0, |c| c.pitch as u32),
             barycentrics: barycentrics.as_ref().map(|b| &b.buffer),
             barycentric_pitch: barycentrics.as_ref().map_or(0, |b| b.pitch as u32),
         };
@@ -1285,7 +1288,9 @@ impl<'d> ClTracer<'d> {
 
             let start = Instant::now();
             hits.read_rows(device, rows, &mut frame.hits[y0 * w..])?;
-            colors.read_rows(device, rows, &mut frame.colors[y0 * w..])?;
+            if let Some(c) = &colors {
+                c.read_rows(device, rows, &mut frame.colors[y0 * w..])?;
+            }
             if let Some(b) = &barycentrics {
                 b.read_rows(device, rows, &mut bary[y0 * w..])?;
             }

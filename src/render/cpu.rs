@@ -78,14 +78,15 @@ pub(crate) fn pixel(
     ray: &Ray,
     shade: &ShadeParams,
 ) -> (Hit, u32, [f32; 2]) {
+    let background = if shade.colors { BACKGROUND } else { 0 };
     match super::integrator::trace_masked(tracer, surface, ray, f32::INFINITY, false) {
-        None => (Hit::NONE, BACKGROUND, [0.0; 2]),
+        None => (Hit::NONE, background, [0.0; 2]),
         Some((i, t)) => {
             let d = ray.dir;
             let distance = t * (d.x * d.x + d.y * d.y + d.z * d.z).sqrt();
             let tri = &tracer.triangles()[i];
-            let n = match shade.shade {
-                super::Shade::Depth => glam::Vec3::ZERO,
+            let n = match (shade.colors, shade.shade) {
+                (false, _) | (_, super::Shade::Depth) => glam::Vec3::ZERO,
                 _ => surface.shading_normal(tri, (ray.origin, d)),
             };
             let b = match shade.barycentrics {
@@ -100,7 +101,11 @@ pub(crate) fn pixel(
                     prim: tri.prim,
                     t: distance,
                 },
-                shade.color(n, distance, d),
+                if shade.colors {
+                    shade.color(n, distance, d)
+                } else {
+                    0
+                },
                 b,
             )
         }

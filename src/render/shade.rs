@@ -17,6 +17,10 @@ pub struct ShadeParams {
     /// Whether the frame's hits carry barycentrics ([`super::Frame::barycentrics`]): what
     /// version 2 of the hit records stores.
     pub(crate) barycentrics: bool,
+    /// Whether the frame's colours are computed. Without them (the benchmark's
+    /// closest-hit query, which writes hit records alone as its peers do) the colours
+    /// stay 0 and the kernel neither shades nor stores one.
+    pub(crate) colors: bool,
 }
 
 impl ShadeParams {
@@ -33,6 +37,7 @@ impl ShadeParams {
             near,
             far,
             barycentrics: false,
+            colors: true,
         }
     }
 
@@ -42,6 +47,11 @@ impl ShadeParams {
             barycentrics,
             ..self
         }
+    }
+
+    /// The same, with the frame's colours computed or not (they stay 0).
+    pub fn with_colors(self, colors: bool) -> Self {
+        ShadeParams { colors, ..self }
     }
 
     /// The packed RGBA colour of a hit with unit (shading) normal `n` at `distance` along
