@@ -18,11 +18,11 @@ FORCE_INLINE float hit_box(const __global Bin32Node* node, float3 org, float3 in
  * first, boxes beyond the closest hit skipped; mirrors src/bvh/bin32.rs step for step.
  * The stack holds STACK_SIZE entries, the tree's depth, which a traversal never needs
  * more than; should it anyway, STATUS_STACK_OVERFLOW is set and the ray reported a miss. */
-FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, bool incoherent, float* t_hit) {
+FORCE_INLINE uint trace_from(SCENE_PARAMS, uint root, float3 org, float3 dir, float t_max, bool any_hit, bool incoherent, float* t_hit) {
     TRACE_START
     uint stack_node[STACK_SIZE];
     float stack_entry[STACK_SIZE];
-    bool live = hit_box(&nodes[0], org, inv, t) >= 0.0f;
+    bool live = hit_box(&nodes[root], org, inv, t) >= 0.0f;
     while (live) {
         const __global Bin32Node* n = &nodes[node];
         bool descend = false;
@@ -59,4 +59,24 @@ FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool 
     }
     *t_hit = t;
     return best;
+}
+
+TRACE_FROM_THE_ROOT
+
+/* The contract of entry_node (traverse.cl): down from the root while a single child's
+ * box may meet the frustum. */
+FORCE_INLINE uint entry_node(__global const Bin32Node* nodes, const Frustum* f) {
+    const __global float4* root = (const __global float4*)&nodes[0];
+    if (!frustum_may_meet(f, root[0].xyz, root[1].xyz)) return MISS;
+    uint node = 0;
+    while (!(nodes[node].right_or_count & LEAF_FLAG)) {
+        uint l = nodes[node].left_or_first, r = nodes[node].right_or_count;
+        const __global float4* lb = (const __global float4*)&nodes[l];
+        const __global float4* rb = (const __global float4*)&nodes[r];
+        bool ml = frustum_may_meet(f, lb[0].xyz, lb[1].xyz), mr = frustum_may_meet(f, rb[0].xyz, rb[1].xyz);
+        if (ml && mr) break;
+        if (!ml && !mr) return MISS;
+        node = ml ? l : r;
+    }
+    return node;
 }

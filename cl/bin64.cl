@@ -33,7 +33,7 @@
  * hit anyway, and halving the stack traffic was measured faster on the H100 than culling
  * popped nodes by a stored entry distance (docs/performance.md, "Kernel changes,
  * measured"). */
-FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, bool incoherent, float* t_hit) {
+FORCE_INLINE uint trace_from(SCENE_PARAMS, uint root, float3 org, float3 dir, float t_max, bool any_hit, bool incoherent, float* t_hit) {
     TRACE_START
     uint stack_node[STACK_SIZE];
     for (;;) {
@@ -67,4 +67,22 @@ FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool 
     }
     *t_hit = t;
     return best;
+}
+
+TRACE_FROM_THE_ROOT
+
+/* The contract of entry_node (traverse.cl): down from the root while a single child's
+ * box may meet the frustum, and that child is an inner node (a traversal starts at one). */
+FORCE_INLINE uint entry_node(__global const Bin64Node* nodes, const Frustum* f) {
+    uint node = 0;
+    for (;;) {
+        const __global float4* n = (const __global float4*)&nodes[node];
+        float4 lxy = n[0], rxy = n[1], z = n[2];
+        uint4 refs = as_uint4(n[3]);
+        bool ml = frustum_may_meet(f, (float3)(lxy.x, lxy.z, z.x), (float3)(lxy.y, lxy.w, z.y));
+        bool mr = frustum_may_meet(f, (float3)(rxy.x, rxy.z, z.z), (float3)(rxy.y, rxy.w, z.w));
+        if (!ml && !mr) return MISS;
+        if ((ml && mr) || (ml ? refs.z : refs.w) != 0) return node;
+        node = ml ? refs.x : refs.y;
+    }
 }

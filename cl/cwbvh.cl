@@ -24,7 +24,7 @@ FORCE_INLINE float byte_of(uint lo, uint hi, uint k) {
  * side), and a ray meets first the corner of its negative direction components. Inner
  * children hit go to bit 24 + (s ^ order) and are visited from the highest bit down:
  * roughly front to back. */
-FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, bool incoherent, float* t_hit) {
+FORCE_INLINE uint trace_from(SCENE_PARAMS, uint root, float3 org, float3 dir, float t_max, bool any_hit, bool incoherent, float* t_hit) {
     WatertightRay ray = watertight_ray(org, dir);
     float3 inv = safe_inverse(dir);
     uint order = 7u ^ ((signbit(dir.x) ? 4u : 0u) | (signbit(dir.y) ? 2u : 0u) | (signbit(dir.z) ? 1u : 0u));
@@ -33,8 +33,8 @@ FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool 
     uint2 stack[STACK_SIZE];
     uint sp = 0;
     /* A node group: .x its first node, .y the children to visit (bits 24-31) over their
-     * parent's inner mask (bits 0-7). The root is a group of one with an empty mask. */
-    uint2 group = (uint2)(0u, 0x80000000u);
+     * parent's inner mask (bits 0-7). The root (or the node a traversal starts from) is a group of one with an empty mask. */
+    uint2 group = (uint2)(root, 0x80000000u);
     for (;;) {
         uint tri_base = 0u, tri_hits = 0u;
         if (group.y > 0x00FFFFFFu) {
@@ -100,4 +100,28 @@ FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool 
     }
     *t_hit = t;
     return best;
+}
+
+TRACE_FROM_THE_ROOT
+
+/* The contract of entry_node (traverse.cl): down from the root while a single slot's box
+ * (as stored: quantized outward) may meet the frustum, and that slot is an inner node. */
+FORCE_INLINE uint entry_node(__global const CwbvhNode* nodes, const Frustum* f) {
+    uint node = 0;
+    for (;;) {
+        const __global CwbvhNode* n = &nodes[node];
+        float3 origin = (float3)(n->origin[0], n->origin[1], n->origin[2]);
+        float3 scale = (float3)(as_float((uint)n->exponent[0] << 23), as_float((uint)n->exponent[1] << 23),
+                                as_float((uint)n->exponent[2] << 23));
+        uint meeting = 0, only = 0;
+        for (uint k = 0; k < 8u; ++k) {
+            if (n->meta[k] == 0) continue;
+            float3 lo = origin + scale * (float3)((float)n->lo_x[k], (float)n->lo_y[k], (float)n->lo_z[k]);
+            float3 hi = origin + scale * (float3)((float)n->hi_x[k], (float)n->hi_y[k], (float)n->hi_z[k]);
+            if (frustum_may_meet(f, lo, hi)) { ++meeting; only = k; }
+        }
+        if (meeting == 0) return MISS;
+        if (meeting > 1 || !((n->inner_mask >> only) & 1u)) return node;
+        node = n->child_base + popcount((uint)n->inner_mask & ((1u << only) - 1u));
+    }
 }

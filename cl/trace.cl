@@ -18,9 +18,9 @@
     int shade, float near, float far,                                   \
     __global Hit* hits, uint hit_pitch,                                 \
     __global uint* colors, uint color_pitch,                            \
-    __global float2* barycentrics, uint barycentric_pitch
+    __global float2* barycentrics, uint barycentric_pitch, __global const uint* entries
 #define PRIMARY SCENE, CAMERA, width, row0, row_end, shade, near, far, hits, hit_pitch, \
-    colors, color_pitch, barycentrics, barycentric_pitch
+    colors, color_pitch, barycentrics, barycentric_pitch, entries
 
 FORCE_INLINE void primary_pixel(PRIMARY_PARAMS, const bool general) {
     uint x = get_global_id(0), y = get_global_id(1);
@@ -28,8 +28,15 @@ FORCE_INLINE void primary_pixel(PRIMARY_PARAMS, const bool general) {
     float3 org = eye.xyz;
     float3 dir = general ? camera_ray(CAMERA, x, y, &org)
                          : camera_ray_at_eye(p0, du, dv, (float)x + 0.5f, (float)y + 0.5f);
-    float t;
-    uint best = trace(SCENE, org, dir, INFINITY, false, false, &t);
+    float t = INFINITY;
+    uint best = MISS;
+#ifdef STACK_SIZE
+    if (entries != 0) {
+        uint root = entries[get_group_id(1) * get_num_groups(0) + get_group_id(0)];
+        if (root != MISS) best = trace_from(SCENE, root, org, dir, INFINITY, false, false, &t);
+    } else
+#endif
+        best = trace(SCENE, org, dir, INFINITY, false, false, &t);
     float3 n = (float3)(0.0f);
     if (best != MISS && shade != SHADE_DEPTH && colors != 0) {
         n = shading_normal(SURFACE, &tris[best], org, dir);
@@ -45,7 +52,26 @@ FORCE_INLINE void primary_pixel(PRIMARY_PARAMS, const bool general) {
     }
 }
 
-/* A perspective camera's primary rays, without barycentrics (barycentrics is not read). */
+/* The node each work-group's camera rays start from in a BVH (entry_node, traverse.cl):
+ * entries[i] for work-group (i % tiles_x, i / tiles_x) of trace_primary's launch over the
+ * band, whose work-groups are tile_width x tile_height pixels; MISS where no ray of the
+ * tile can hit anything. Below the root its rays skip the top of the tree, where every
+ * ray of the tile would test the same boxes. A perspective camera's only (the rays leave
+ * from the eye). */
+#if defined(KERNEL_TRACE_PRIMARY) && defined(STACK_SIZE)
+KERNEL void tile_entries(SCENE_PARAMS, CAMERA_BAND_PARAMS, uint tile_width, uint tile_height,
+                         uint tiles_x, uint tiles, __global uint* entries) {
+    uint i = get_global_id(0);
+    if (i >= tiles) return;
+    uint x0 = (i % tiles_x) * tile_width, y0 = row0 + (i / tiles_x) * tile_height;
+    Frustum f = tile_frustum(eye, p0, du, dv, x0, y0, min(x0 + tile_width, width),
+                             min(y0 + tile_height, row_end));
+    entries[i] = entry_node(nodes, &f);
+}
+#endif
+
+/* A perspective camera's primary rays, without barycentrics (barycentrics is not read);
+ * with entries not null (a BVH program's), each work-group's from its tile's entry node. */
 #ifdef KERNEL_TRACE_PRIMARY
 KERNEL void trace_primary(PRIMARY_PARAMS) { primary_pixel(PRIMARY, false); }
 #endif

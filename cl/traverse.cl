@@ -23,15 +23,38 @@
 #error "a BVH program needs STACK_SIZE (src/device/program.rs passes it)"
 #endif
 
+/* A BVH layout's file defines trace through
+ *
+ *   uint trace_from(SCENE_PARAMS, uint root, float3 org, float3 dir, float t_max,
+ *                   bool any_hit, bool incoherent, float* t_hit)
+ *
+ * which searches the subtree of node `root` alone (trace: from node 0, the root, by
+ * TRACE_FROM_THE_ROOT, written after it; OpenCL C has no variadic macros); and, for
+ * camera rays,
+ *
+ *   uint entry_node(__global const NODE* nodes, const Frustum* f)
+ *
+ * the deepest node it finds (by one walk down from the root, stopping where two children
+ * may meet f) whose subtree holds every leaf whose box may meet frustum f (camera.cl), or
+ * MISS if none may. Every ray inside f then finds in the subtree of that node the hit it
+ * would find from the root, by the same steps: outside it, the traversal from the root
+ * meets no leaf. tile_entries (trace.cl) finds it for each work-group's tile of pixels,
+ * and camera rays start there. */
+#define TRACE_FROM_THE_ROOT                                              \
+    FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, \
+                            bool incoherent, float* t_hit) {             \
+        return trace_from(SCENE, 0u, org, dir, t_max, any_hit, incoherent, t_hit); \
+    }
+
 /* What the binary and wide traversals start with: the ray's constants for the triangle and
- * box tests, no hit before t_max yet, and an empty stack below the root. */
+ * box tests, no hit before t_max yet, and an empty stack below the node `root`. */
 #define TRACE_START                                                      \
     WatertightRay ray = watertight_ray(org, dir);                        \
     float3 inv = safe_inverse(dir);                                      \
     float t = t_max;                                                     \
     uint best = MISS;                                                    \
     uint sp = 0;                                                         \
-    uint node = 0;
+    uint node = root;
 
 /* Keeps a triangle test's result h (negative: no hit) for triangle `index` as the closest
  * hit so far (t, best); with any_hit, the first hit ends the traversal. */

@@ -32,7 +32,7 @@ typedef char wide_lanes_are_slots[vec_step(WIDE_F) == WIDE_WIDTH ? 1 : -1];
 /* Wide traversal: each node's children boxes are tested plane by plane with one vector
  * operation per plane; leaf children are tested at once, the nearest inner one visited
  * next. Same contract as every trace (traverse.cl). */
-FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool any_hit, bool incoherent, float* t_hit) {
+FORCE_INLINE uint trace_from(SCENE_PARAMS, uint root, float3 org, float3 dir, float t_max, bool any_hit, bool incoherent, float* t_hit) {
     TRACE_START
     float3 inv_near = near_inverse(inv);
     uint stack_node[STACK_SIZE];
@@ -83,4 +83,25 @@ FORCE_INLINE uint trace(SCENE_PARAMS, float3 org, float3 dir, float t_max, bool 
     }
     *t_hit = t;
     return best;
+}
+
+TRACE_FROM_THE_ROOT
+
+/* The contract of entry_node (traverse.cl): down from the root while a single slot's box
+ * may meet the frustum, and that slot is an inner node. */
+FORCE_INLINE uint entry_node(__global const WIDE_NODE* nodes, const Frustum* f) {
+    uint node = 0;
+    for (;;) {
+        const __global WIDE_NODE* n = &nodes[node];
+        uint meeting = 0, only = 0;
+        for (uint k = 0; k < WIDE_WIDTH; ++k) {
+            if (n->count[k] == EMPTY_SLOT) continue;
+            float3 lo = (float3)(n->min_x[k], n->min_y[k], n->min_z[k]);
+            float3 hi = (float3)(n->max_x[k], n->max_y[k], n->max_z[k]);
+            if (frustum_may_meet(f, lo, hi)) { ++meeting; only = k; }
+        }
+        if (meeting == 0) return MISS;
+        if (meeting > 1 || n->count[only] != 0) return node;
+        node = n->child[only];
+    }
 }

@@ -14,7 +14,9 @@ use cltrace::bvh::{Bin32Bvh, Bin32Node, BuildOptions, Bvh, DeviceLayout, Layout}
 use cltrace::bvh::{wide4::Wide4Node, wide8::Wide8Node};
 use cltrace::camera::{Camera, CameraSettings, Projection};
 use cltrace::device::tracer::STATUS_STACK_OVERFLOW;
-use cltrace::device::{ClDevice, ClTracer, Kernel, Kernels, shared_constants};
+use cltrace::device::{
+    ClDevice, ClTracer, Kernel, Kernels, shared_constants, tile_entries_parameters,
+};
 use cltrace::input::generate::Generator;
 use cltrace::intersect::{ROBUST_EXIT, Triangle};
 
@@ -221,8 +223,11 @@ fn kernel_parameters_match_the_host_bindings() {
         let program = device
             .compile_program(bvh, Kernels::ALL, "-cl-kernel-arg-info")
             .unwrap();
-        for kernel in Kernel::ALL {
-            let k = ocl::core::create_kernel(program.ocl(), kernel.name()).unwrap();
+        // A BVH program holds tile_entries beside trace_primary.
+        let entries = bvh.map(|_| ("tile_entries", tile_entries_parameters()));
+        let kernels = Kernel::ALL.map(|k| (k.name(), k.parameters(bvh.is_some())));
+        for (name, parameters) in kernels.into_iter().chain(entries) {
+            let k = ocl::core::create_kernel(program.ocl(), name).unwrap();
             let count = match ocl::core::get_kernel_info(&k, KernelInfo::NumArgs).unwrap() {
                 KernelInfoResult::NumArgs(n) => n,
                 other => panic!("{other:?}"),
@@ -238,9 +243,8 @@ fn kernel_parameters_match_the_host_bindings() {
                 .collect();
             assert_eq!(
                 names,
-                kernel.parameters(bvh.is_some()),
-                "{} of the {:?} program",
-                kernel.name(),
+                parameters,
+                "{name} of the {:?} program",
                 bvh.map(|b| b.0)
             );
         }

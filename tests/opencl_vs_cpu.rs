@@ -21,7 +21,7 @@ use cltrace::input::load_mesh;
 use cltrace::intersect::ClosestHit;
 use cltrace::intersect::triangles_in_order;
 use cltrace::mesh::Mesh;
-use cltrace::render::{Frame, Shade, ShadeParams, cpu};
+use cltrace::render::{Frame, MISS, Shade, ShadeParams, cpu};
 use glam::Vec3;
 
 struct Case {
@@ -515,4 +515,137 @@ fn rays_along_box_faces_match_brute_force() {
         let hits = hits.unwrap_or_else(|e| panic!("{e}"));
         assert!(hits > rays.len() / 4, "{hits} of {} rays hit", rays.len());
     }
+}
+
+/// Cases made to catch a tile entry (cl/trace.cl, `tile_entries`) that leaves out a leaf
+/// a ray of its tile meets: a soup far from the origin, where rounding is coarse; and
+/// slivers with a corner on the camera ray of each pixel along the tiles' edges (every
+/// 8th row and column, and the next: the work-group shapes' sides divide 8), reaching
+/// out of the tile into its neighbour's frustum.
+fn entry_cases() -> Vec<Case> {
+    let mut far = generate(Generator::Soup {
+        triangles: 500,
+        seed: 5,
+    });
+    for p in &mut far.positions {
+        *p += Vec3::new(3.0e4, -2.0e4, 1.0e4);
+    }
+    let (width, height) = (64u32, 48u32);
+    let settings = CameraSettings {
+        eye: Some([0.0, 0.0, 0.0]),
+        look_at: Some([0.0, 0.0, -1.0]),
+        fov: Some(50.0),
+        ..small(width, height)
+    };
+    let unit = cltrace::geometry::Aabb {
+        min: Vec3::splat(-1.0),
+        max: Vec3::splat(1.0),
+    };
+    let pinhole = Camera::from_settings(&settings, &unit).unwrap().pinhole();
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    let edge = |v: u32| v % 8 == 7 || v.is_multiple_of(8);
+    for y in 0..height {
+        for x in (0..width).filter(|&x| edge(x) || edge(y)) {
+            // Away from the pixel's own tile: right of a tile's last column, left of the
+            // first, and likewise in rows.
+            let out_x = if x % 8 == 7 { 1.0 } else { -1.0 };
+            let out_y = if y % 8 == 7 { 1.0 } else { -1.0 };
+            let depth = 2.0 + 0.01 * (positions.len() % 97) as f32;
+            let at = |fx: f32, fy: f32| pinhole.ray_at(fx, fy).dir * depth;
+            let (fx, fy) = (x as f32 + 0.5, y as f32 + 0.5);
+            let n = positions.len() as u32;
+            positions.extend([
+                pinhole.ray(x, y).dir * depth,
+                at(fx + 0.4 * out_x, fy),
+                at(fx + 0.4 * out_x, fy + 0.4 * out_y),
+            ]);
+            triangles.push([n, n + 1, n + 2]);
+        }
+    }
+    vec![
+        case("a soup far from the origin", far, small(64, 48)),
+        case(
+            "slivers along the tiles' edges",
+            Mesh::new(positions, triangles),
+            settings,
+        ),
+    ]
+}
+
+/// A perspective camera's rays start from their tile's entry node: on every layout and
+/// device, `trace_primary`'s hits (from the entries) equal `trace_primary_general`'s
+/// (from the root) bit for bit, and the reference's, on every case.
+#[test]
+fn camera_rays_from_their_tiles_entry_nodes_find_the_hits_from_the_root() {
+    on_every_device(|device| {
+        for c in cases().into_iter().chain(entry_cases()) {
+            let reference = reference(&c);
+            assert!(coverage(&reference) > 0, "{}: sees nothing", c.name);
+            for tracer in DeviceTracer::layouts() {
+                let mut cl = tracer.prepare(device, &c.mesh, &BuildOptions::default());
+                let shade = ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds());
+                let pinhole = c.camera.pinhole();
+                let (w, h) = (c.camera.width, c.camera.height);
+                let entries = cl.render(&pinhole, w, h, &shade, false).unwrap().0;
+                let from_root = shade.with_barycentrics(true);
+                let root = cl.render(&pinhole, w, h, &from_root, false).unwrap().0;
+                let what = format!("{} on {}", tracer.name(), device.info.name);
+                for (i, (a, b)) in entries.hits.iter().zip(&root.hits).enumerate() {
+                    assert!(
+                        a.prim == b.prim && a.t.to_bits() == b.t.to_bits(),
+                        "{}: {what}: pixel {i} hits {a:?} from its tile's entry, {b:?} from the root",
+                        c.name
+                    );
+                }
+                check(&c, &what, &reference, &root);
+            }
+        }
+    });
+}
+
+/// The entries are worth their pass: on a landscape seen from above, filling the middle
+/// of the view (an open surface: a tile's frustum meets only the part below it), some
+/// tiles start below the root and the tiles that see nothing trace nothing (MISS); a
+/// camera turned away sees nothing from any tile.
+#[test]
+fn tiles_seeing_part_of_a_mesh_start_below_the_root_and_empty_tiles_trace_nothing() {
+    let mesh = generate(Generator::Landscape {
+        resolution: 32,
+        seed: 9,
+    });
+    let above = CameraSettings {
+        eye: Some([0.0, 4.0, 0.0]),
+        look_at: Some([0.0, 0.0, 0.0]),
+        up: Some([0.0, 0.0, -1.0]),
+        fov: Some(60.0),
+        ..small(96, 64)
+    };
+    let away = CameraSettings {
+        look_at: Some([0.0, 8.0, 0.0]),
+        ..above
+    };
+    let camera = |s: &CameraSettings| Camera::from_settings(s, &mesh.bounds()).unwrap();
+    let (above, away) = (camera(&above), camera(&away));
+    on_every_device(|device| {
+        for tracer in DeviceTracer::layouts() {
+            let mut cl = tracer.prepare(device, &mesh, &BuildOptions::default());
+            let what = format!("{} on {}", tracer.name(), device.info.name);
+            let entries = cl
+                .tile_entries(&above.pinhole(), above.width, above.height)
+                .unwrap()
+                .expect("a BVH program has tile_entries");
+            let miss = entries.iter().filter(|&&e| e == MISS).count();
+            let below = entries.iter().filter(|&&e| e != MISS && e != 0).count();
+            assert!(miss > 0, "{what}: no tile is empty: {entries:?}");
+            assert!(
+                below > 0,
+                "{what}: every tile starts at the root: {entries:?}"
+            );
+            let entries = cl
+                .tile_entries(&away.pinhole(), away.width, away.height)
+                .unwrap()
+                .unwrap();
+            assert!(entries.iter().all(|&e| e == MISS), "{what}: {entries:?}");
+        }
+    });
 }

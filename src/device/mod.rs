@@ -9,7 +9,7 @@ pub mod tracer;
 pub(crate) use pitched::PitchedBuffer;
 pub use program::{Constant, Program, shared_constants};
 pub use program_cache::{CacheUse, default_folder as program_cache_folder};
-pub use tracer::{ClTracer, Kernel, Kernels};
+pub use tracer::{ClTracer, Kernel, Kernels, tile_entries_parameters};
 
 use std::fmt;
 use std::path::PathBuf;

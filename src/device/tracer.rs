@@ -365,7 +365,33 @@ kernel_params! {
         color_pitch: u32,
         barycentrics: Option<&'a ocl::Buffer<Float2>>,
         barycentric_pitch: u32,
+        entries: Option<&'a ocl::Buffer<u32>>,
     }
+}
+
+kernel_params! {
+    /// `tile_entries` (cl/trace.cl) after the scene's and the band's parameters: the
+    /// entry node of each work-group of `trace_primary`'s launch over the band.
+    #[derive(Default)]
+    struct TileEntriesParams<'a> {
+        tile_width: u32,
+        tile_height: u32,
+        tiles_x: u32,
+        tiles: u32,
+        entries: Option<&'a ocl::Buffer<u32>>,
+    }
+}
+
+/// The parameters of `tile_entries` (cl/trace.cl), which a BVH program compiles beside
+/// `trace_primary`, as the host binds them, as [`Kernel::parameters`] lists a kernel's.
+pub fn tile_entries_parameters() -> Vec<&'static str> {
+    [
+        BvhSceneParams::NAMES,
+        SurfaceParams::NAMES,
+        BandParams::NAMES,
+        TileEntriesParams::NAMES,
+    ]
+    .concat()
 }
 
 kernel_params! {
@@ -544,9 +570,9 @@ pub struct ClTracer<'d> {
     program: Program,
     scene: Scene,
     lights: Option<DeviceLights>,
-    /// `trace_primary` and, where the program holds it, `trace_primary_general`, bound to
-    /// the scene.
-    primary: [Option<ocl::Kernel>; 2],
+    /// `trace_primary` and, where the program holds them, `trace_primary_general` and (in a
+    /// BVH program) `tile_entries`, bound to the scene.
+    primary: [Option<ocl::Kernel>; 3],
     bands: BandPlanner,
     sample_bands: BandPlanner,
     /// The most bytes one output image may take: the device's largest allocation and an
@@ -1252,7 +1278,21 @@ impl<'d> ClTracer<'d> {
         let k = k.as_ref().expect("the program's primary kernels are built");
         // The band (row0, row_end) changes from launch to launch.
         let mut band = BandParams::new(camera, width);
+        let local = self.local;
+        // Perspective camera rays start from their tile's entry node (cl/trace.cl).
+        let entry_kernel = self.primary[2].as_ref().filter(|_| !general);
+        let entries = match entry_kernel {
+            Some(_) => Some(
+                ocl::Buffer::<u32>::builder()
+                    .queue(device.queue.clone())
+                    .len(w.div_ceil(local[0]) * band_capacity.div_ceil(local[1]))
+                    .build()
+                    .map_err(|e| device.error("allocating the tile entries", e))?,
+            ),
+            None => None,
+        };
         let params = PrimaryParams {
+            entries: entries.as_ref(),
             shade: shade.shade.code(),
             near: shade.near,
             far: shade.far,
@@ -1265,7 +1305,6 @@ impl<'d> ClTracer<'d> {
         };
         self.scene.clear_status(device)?;
 
-        let local = self.local;
         let mut frame = Frame::new(width, height);
         let mut bary = vec![Float2::zero(); if barycentrics.is_some() { w * h } else { 0 }];
         let mut times = DeviceTimes::default();
@@ -1281,7 +1320,17 @@ impl<'d> ClTracer<'d> {
             band.set(k).and_then(|()| params.set(k)).map_err(|e| {
                 device.error(&format!("setting the arguments of {}", kernel.name()), e)
             })?;
-            let ms = launch_rows(device, k, local, w, y0, rows)?;
+            let entries_done = match (entry_kernel, &entries) {
+                (Some(e), Some(buffer)) => {
+                    Some(self.queue_tile_entries(e, &band, buffer, w, rows)?)
+                }
+                _ => None,
+            };
+            // Both count as the frame's kernel time.
+            let mut ms = launch_rows(device, k, local, w, y0, rows)?;
+            if let Some(done) = &entries_done {
+                ms += wait_ms(device, done)?;
+            }
             times.kernel_ms += ms;
             times.launches += 1;
             self.bands.learn(rows * w, ms);
@@ -1316,6 +1365,73 @@ impl<'d> ClTracer<'d> {
         self.scene.check_status(device)?;
         frame.barycentrics = bary.iter().map(|b| [b[0], b[1]]).collect();
         Ok((frame, times))
+    }
+
+    /// Enqueues `tile_entries` over the band `band` sets, `rows` rows of a `width`-pixel
+    /// image: the entry node of each work-group of `trace_primary` there, into `entries`.
+    fn queue_tile_entries(
+        &self,
+        kernel: &ocl::Kernel,
+        band: &BandParams,
+        entries: &ocl::Buffer<u32>,
+        width: usize,
+        rows: usize,
+    ) -> Result<ocl::Event> {
+        let (device, local) = (self.device, self.local);
+        let tiles_x = width.div_ceil(local[0]);
+        let tiles = tiles_x * rows.div_ceil(local[1]);
+        let params = TileEntriesParams {
+            tile_width: local[0] as u32,
+            tile_height: local[1] as u32,
+            tiles_x: tiles_x as u32,
+            tiles: tiles as u32,
+            entries: Some(entries),
+        };
+        band.set(kernel)
+            .and_then(|()| params.set(kernel))
+            .map_err(|e| device.error("setting the arguments of tile_entries", e))?;
+        let group = local[0] * local[1];
+        let cmd = kernel
+            .cmd()
+            .global_work_size(tiles.div_ceil(group) * group)
+            .local_work_size(group);
+        queue_kernel(device, cmd)
+    }
+
+    /// The node of the BVH each work-group of a perspective camera's primary rays starts
+    /// from, work-groups in row-major order over the whole image (as one band):
+    /// [`crate::render::MISS`] where none of its rays can hit anything.
+    /// `None` for brute force or a program without `trace_primary`. For tests and tools:
+    /// [`ClTracer::render`] finds them itself.
+    pub fn tile_entries(
+        &mut self,
+        camera: &Pinhole,
+        width: u32,
+        height: u32,
+    ) -> Result<Option<Vec<u32>>> {
+        let device = self.device;
+        let Some(kernel) = &self.primary[2] else {
+            return Ok(None);
+        };
+        let mut band = BandParams::new(camera, width);
+        band.row_end = height;
+        let (w, h) = (width as usize, height as usize);
+        let tiles = w.div_ceil(self.local[0]) * h.div_ceil(self.local[1]);
+        let entries = ocl::Buffer::<u32>::builder()
+            .queue(device.queue.clone())
+            .len(tiles)
+            .build()
+            .map_err(|e| device.error("allocating the tile entries", e))?;
+        wait_ms(
+            device,
+            &self.queue_tile_entries(kernel, &band, &entries, w, h)?,
+        )?;
+        let mut out = vec![0u32; tiles];
+        entries
+            .read(&mut out)
+            .enq()
+            .map_err(|e| device.error("reading the tile entries back", e))?;
+        Ok(Some(out))
     }
 
     /// Traces arbitrary rays: the closest hit of each in `(0, t_max)`, or with `any_hit`
@@ -1445,13 +1561,14 @@ fn require_kernel(program: &Program, kernel: Kernel) -> Result<()> {
     Ok(())
 }
 
-/// `trace_primary` and `trace_primary_general` for `scene` where the program holds them, the
-/// frame's values to be set by [`ClTracer::render`].
+/// `trace_primary` and `trace_primary_general` for `scene` where the program holds them, and
+/// with the first in a BVH program `tile_entries`, the frame's values to be set by
+/// [`ClTracer::render`].
 fn primary_kernels(
     device: &ClDevice,
     program: &Program,
     scene: &Scene,
-) -> Result<[Option<ocl::Kernel>; 2]> {
+) -> Result<[Option<ocl::Kernel>; 3]> {
     let build = |kernel: Kernel| {
         if !program.kernels().contains(kernel) {
             return Ok(None);
@@ -1464,9 +1581,22 @@ fn primary_kernels(
             .map(Some)
             .map_err(|e| device.error(&format!("creating the {} kernel", kernel.name()), e))
     };
+    let entries = match scene.bvh.is_some() && program.kernels().contains(Kernel::TracePrimary) {
+        true => {
+            let mut builder = scene_kernel_builder(device, program, "tile_entries", scene);
+            BandParams::default().bind(&mut builder);
+            TileEntriesParams::default().bind(&mut builder);
+            let kernel = builder
+                .build()
+                .map_err(|e| device.error("creating the tile_entries kernel", e))?;
+            Some(kernel)
+        }
+        false => None,
+    };
     Ok([
         build(Kernel::TracePrimary)?,
         build(Kernel::TracePrimaryGeneral)?,
+        entries,
     ])
 }
 
@@ -1478,10 +1608,20 @@ fn kernel_builder<'b>(
     scene: &'b Scene,
 ) -> Result<ocl::builders::KernelBuilder<'b>> {
     require_kernel(program, kernel)?;
+    Ok(scene_kernel_builder(device, program, kernel.name(), scene))
+}
+
+/// A builder of the kernel `name` of `program` with the scene's parameters bound.
+fn scene_kernel_builder<'b>(
+    device: &ClDevice,
+    program: &'b Program,
+    name: &str,
+    scene: &'b Scene,
+) -> ocl::builders::KernelBuilder<'b> {
     let mut builder = ocl::Kernel::builder();
     builder
         .program(program.ocl())
-        .name(kernel.name())
+        .name(name)
         .queue(device.queue.clone());
     match &scene.bvh {
         None => BruteSceneParams {
@@ -1497,7 +1637,7 @@ fn kernel_builder<'b>(
         .bind(&mut builder),
     }
     scene.surface.params().bind(&mut builder);
-    Ok(builder)
+    builder
 }
 
 /// The rays counted in `rows` of a pitched image of counts `width` wide.
