@@ -16,6 +16,7 @@ mod frames;
 mod fuzz_regressions;
 mod gltf;
 mod interrupt;
+mod kernel_sources;
 mod layout;
 mod lights;
 mod limits;

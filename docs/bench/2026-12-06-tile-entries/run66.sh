@@ -16,10 +16,11 @@ done
 if cmp -s /tmp/img-main.png /tmp/img-new.png && cmp -s /tmp/hits-main.bin /tmp/hits-new.bin; then echo "$m $l: same image and hits"; else echo "$m $l: DIFFERENT"; tail -2 /tmp/render-new.txt; fi | tee -a $OUT/render.txt
 done; done
 wait
-C="--methods cl-bvh --layouts bin64,cwbvh --rays primary --resolutions 1920x1080 --devices gpu --repetitions 20"
+C="--methods cl-bvh --layouts bin64,cwbvh --resolutions 1920x1080 --devices gpu --repetitions 20"
 for r in 1 2 3 4; do
   for v in main new; do
-    timeout 60 /tmp/cltrace-$v bench $B $D $C 2>&1 | grep -E "^\| stanford|rror" | awk -F'|' -v t="[r$r $v]" '{printf "%s %s %s median %s min %s Mrays/s %s\n", t, $2, $8, $12, $13, $14}' | tee -a $OUT/bench.txt
+    R=primary; [ $r = 1 ] && R=primary,diffuse-16
+    timeout 60 /tmp/cltrace-$v bench $B $D $C --rays $R 2>&1 | grep -E "^\| stanford|rror" | awk -F'|' -v t="[r$r $v]" '{printf "%s %s %s %s median %s min %s Mrays/s %s\n", t, $2, $5, $8, $12, $13, $14}' | tee -a $OUT/bench.txt
   done
   (cd .gpu/tinybvh && for m in bunny dragon; do timeout 60 /tmp/harness /tmp/data/$m tiles scan 2>&1 | grep -E "tinybvh gpu|rror" | sed "s/^/[tinybvh r$r] /"; done) | tee -a $OUT/tinybvh.txt
   echo "round $r done at ${SECONDS}s"
