@@ -63,17 +63,20 @@ FORCE_INLINE uint trace_from(SCENE_PARAMS, uint root, float3 org, float3 dir, fl
 
 TRACE_FROM_THE_ROOT
 
+/* Whether `node`'s box may meet frustum f (hit_box's counterpart for a tile's rays). */
+FORCE_INLINE bool box_may_meet(const __global Bin32Node* node, const Frustum* f) {
+    const __global float4* row = (const __global float4*)node;
+    return frustum_may_meet(f, row[0].xyz, row[1].xyz);
+}
+
 /* The contract of entry_node (traverse.cl): down from the root while a single child's
  * box may meet the frustum. */
 FORCE_INLINE uint entry_node(__global const Bin32Node* nodes, const Frustum* f) {
-    const __global float4* root = (const __global float4*)&nodes[0];
-    if (!frustum_may_meet(f, root[0].xyz, root[1].xyz)) return MISS;
+    if (!box_may_meet(&nodes[0], f)) return MISS;
     uint node = 0;
     while (!(nodes[node].right_or_count & LEAF_FLAG)) {
         uint l = nodes[node].left_or_first, r = nodes[node].right_or_count;
-        const __global float4* lb = (const __global float4*)&nodes[l];
-        const __global float4* rb = (const __global float4*)&nodes[r];
-        bool ml = frustum_may_meet(f, lb[0].xyz, lb[1].xyz), mr = frustum_may_meet(f, rb[0].xyz, rb[1].xyz);
+        bool ml = box_may_meet(&nodes[l], f), mr = box_may_meet(&nodes[r], f);
         if (ml && mr) break;
         if (!ml && !mr) return MISS;
         node = ml ? l : r;

@@ -33,7 +33,8 @@ FORCE_INLINE uint trace_from(SCENE_PARAMS, uint root, float3 org, float3 dir, fl
     uint2 stack[STACK_SIZE];
     uint sp = 0;
     /* A node group: .x its first node, .y the children to visit (bits 24-31) over their
-     * parent's inner mask (bits 0-7). The root (or the node a traversal starts from) is a group of one with an empty mask. */
+     * parent's inner mask (bits 0-7). The node a traversal starts from (the root, or a
+     * tile's entry node) is a group of one with an empty mask. */
     uint2 group = (uint2)(root, 0x80000000u);
     for (;;) {
         uint tri_base = 0u, tri_hits = 0u;

@@ -1280,19 +1280,15 @@ impl<'d> ClTracer<'d> {
         let mut band = BandParams::new(camera, width);
         let local = self.local;
         // Perspective camera rays start from their tile's entry node (cl/trace.cl).
-        let entry_kernel = self.primary[2].as_ref().filter(|_| !general);
-        let entries = match entry_kernel {
-            Some(_) => Some(
-                ocl::Buffer::<u32>::builder()
-                    .queue(device.queue.clone())
-                    .len(w.div_ceil(local[0]) * band_capacity.div_ceil(local[1]))
-                    .build()
-                    .map_err(|e| device.error("allocating the tile entries", e))?,
-            ),
+        let entries = match self.primary[2].as_ref().filter(|_| !general) {
+            Some(kernel) => {
+                let tiles = self.tiles(w, band_capacity).1;
+                Some((kernel, entries_buffer(device, tiles)?))
+            }
             None => None,
         };
         let params = PrimaryParams {
-            entries: entries.as_ref(),
+            entries: entries.as_ref().map(|(_, buffer)| buffer),
             shade: shade.shade.code(),
             near: shade.near,
             far: shade.far,
@@ -1320,11 +1316,11 @@ impl<'d> ClTracer<'d> {
             band.set(k).and_then(|()| params.set(k)).map_err(|e| {
                 device.error(&format!("setting the arguments of {}", kernel.name()), e)
             })?;
-            let entries_done = match (entry_kernel, &entries) {
-                (Some(e), Some(buffer)) => {
-                    Some(self.queue_tile_entries(e, &band, buffer, w, rows)?)
+            let entries_done = match &entries {
+                Some((kernel, buffer)) => {
+                    Some(self.queue_tile_entries(kernel, &band, buffer, w, rows)?)
                 }
-                _ => None,
+                None => None,
             };
             // Both count as the frame's kernel time.
             let mut ms = launch_rows(device, k, local, w, y0, rows)?;
@@ -1367,6 +1363,13 @@ impl<'d> ClTracer<'d> {
         Ok((frame, times))
     }
 
+    /// The work-groups of an image kernel's launch over `rows` rows of a `width`-pixel
+    /// image (the tiles `tile_entries` finds an entry node for): per row, and in all.
+    fn tiles(&self, width: usize, rows: usize) -> (usize, usize) {
+        let tiles_x = width.div_ceil(self.local[0]);
+        (tiles_x, tiles_x * rows.div_ceil(self.local[1]))
+    }
+
     /// Enqueues `tile_entries` over the band `band` sets, `rows` rows of a `width`-pixel
     /// image: the entry node of each work-group of `trace_primary` there, into `entries`.
     fn queue_tile_entries(
@@ -1378,8 +1381,7 @@ impl<'d> ClTracer<'d> {
         rows: usize,
     ) -> Result<ocl::Event> {
         let (device, local) = (self.device, self.local);
-        let tiles_x = width.div_ceil(local[0]);
-        let tiles = tiles_x * rows.div_ceil(local[1]);
+        let (tiles_x, tiles) = self.tiles(width, rows);
         let params = TileEntriesParams {
             tile_width: local[0] as u32,
             tile_height: local[1] as u32,
@@ -1416,12 +1418,8 @@ impl<'d> ClTracer<'d> {
         let mut band = BandParams::new(camera, width);
         band.row_end = height;
         let (w, h) = (width as usize, height as usize);
-        let tiles = w.div_ceil(self.local[0]) * h.div_ceil(self.local[1]);
-        let entries = ocl::Buffer::<u32>::builder()
-            .queue(device.queue.clone())
-            .len(tiles)
-            .build()
-            .map_err(|e| device.error("allocating the tile entries", e))?;
+        let tiles = self.tiles(w, h).1;
+        let entries = entries_buffer(device, tiles)?;
         wait_ms(
             device,
             &self.queue_tile_entries(kernel, &band, &entries, w, h)?,
@@ -1638,6 +1636,15 @@ fn scene_kernel_builder<'b>(
     }
     scene.surface.params().bind(&mut builder);
     builder
+}
+
+/// A device buffer for the entry nodes of `tiles` tiles.
+fn entries_buffer(device: &ClDevice, tiles: usize) -> Result<ocl::Buffer<u32>> {
+    ocl::Buffer::<u32>::builder()
+        .queue(device.queue.clone())
+        .len(tiles)
+        .build()
+        .map_err(|e| device.error("allocating the tile entries", e))
 }
 
 /// The rays counted in `rows` of a pitched image of counts `width` wide.
