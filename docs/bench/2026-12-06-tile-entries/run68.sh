@@ -1,7 +1,10 @@
 #!/bin/bash
-# run67.sh cut to what a short lease allows: a bench round of main, new (tile entries)
-# and E (entries walked inside trace_primary), tinybvh, the bin64 renders compared,
-# and more rounds while time lasts.
+# Tile entry nodes for camera rays on the GPU. main = before (cltrace.xz, 5b4ff34);
+# new = the head (cltrace-new.xz: a tile_entries pass before trace_primary); E = new with
+# kernels k-E (each work-group's first work-item walks to its entry inside trace_primary,
+# shared through local memory; the separate pass returns at once). Bench rounds first,
+# alternated, tinybvh each round, the renders compared between rounds, so that a short
+# lease still returns the first round.
 set -u
 REPO=$PWD
 OUT=${OUT:-/tmp/out}; mkdir -p $OUT
@@ -18,14 +21,16 @@ renders() { for m in $B $D; do for l in "$@"; do for v in main new E; do
   done
   for v in new E; do if cmp -s /tmp/img-main.png /tmp/img-$v.png && cmp -s /tmp/hits-main.bin /tmp/hits-$v.bin; then echo "$m $l $v: same image and hits"; else echo "$m $l $v: DIFFERENT"; tail -2 /tmp/render-$v.txt; fi | tee -a $OUT/render.txt; done
 done; done; }
-C="--methods cl-bvh --layouts bin64,cwbvh --resolutions 1920x1080 --devices gpu --repetitions 20 --rays primary"
+C="--methods cl-bvh --layouts bin64,cwbvh --resolutions 1920x1080 --devices gpu --repetitions 20"
 for r in 1 2 3 4; do
   for v in main new E; do
-    run $v bench $B $D $C 2>&1 | grep -E "^\| stanford|rror" | awk -F'|' -v t="[r$r $v]" '{printf "%s %s %s %s median %s min %s Mrays/s %s\n", t, $2, $5, $8, $12, $13, $14}' | tee -a $OUT/bench.txt
+    R=primary; [ $r = 1 ] && R=primary,diffuse-16
+    run $v bench $B $D $C --rays $R 2>&1 | grep -E "^\| stanford|rror" | awk -F'|' -v t="[r$r $v]" '{printf "%s %s %s %s median %s min %s Mrays/s %s\n", t, $2, $5, $8, $12, $13, $14}' | tee -a $OUT/bench.txt
   done
   [ $r = 1 ] && wait
   (cd .gpu/tinybvh && for m in bunny dragon; do timeout 60 /tmp/harness /tmp/data/$m tiles scan 2>&1 | grep -E "tinybvh gpu|rror" | sed "s/^/[tinybvh r$r] /"; done) | tee -a $OUT/tinybvh.txt
   echo "round $r done at ${SECONDS}s" | tee -a $OUT/bench.txt
   [ $r = 1 ] && renders bin64
   [ $r = 2 ] && renders cwbvh
+  [ $r = 3 ] && renders bin32 wide8
 done
