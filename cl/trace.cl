@@ -22,8 +22,41 @@
 #define PRIMARY SCENE, CAMERA, width, row0, row_end, shade, near, far, hits, hit_pitch, \
     colors, color_pitch, barycentrics, barycentric_pitch, entries
 
-FORCE_INLINE void primary_pixel(PRIMARY_PARAMS, const bool general) {
+/* The entry node (entry_node, traverse.cl) of the camera rays of pixels [x0, x1) x [y0, y1)
+ * of the band: MISS where none of them can hit anything. */
+#ifdef STACK_SIZE
+FORCE_INLINE uint tile_entry(SCENE_PARAMS, CAMERA_BAND_PARAMS, uint x0, uint y0, uint x1, uint y1) {
+    Frustum f = tile_frustum(eye, p0, du, dv, x0, y0, min(x1, width), min(y1, row_end));
+    return entry_node(nodes, &f);
+}
+
+/* The node this work-item's camera ray starts from: its work-group's tile's entry node,
+ * or the root (0) where the host passes no entries. With GROUP_ENTRIES (the host's choice
+ * by device and layout, src/device/program.rs) the work-group's first work-item finds it
+ * and shares it through group_entry: every work-item of the group must call this. Else the
+ * host's tile_entries pass has put it in entries. */
+FORCE_INLINE uint tile_root(PRIMARY_PARAMS, __local uint* group_entry) {
+#ifdef GROUP_ENTRIES
+    if (get_local_id(0) == 0 && get_local_id(1) == 0) {
+        uint x0 = get_group_id(0) * get_local_size(0);
+        uint y0 = row0 + get_group_id(1) * get_local_size(1);
+        *group_entry = tile_entry(SCENE, CAMERA, width, row0, row_end, x0, y0,
+                                  x0 + get_local_size(0), y0 + get_local_size(1));
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    return *group_entry;
+#else
+    return entries != 0 ? entries[get_group_id(1) * get_num_groups(0) + get_group_id(0)] : 0u;
+#endif
+}
+#endif
+
+FORCE_INLINE void primary_pixel(PRIMARY_PARAMS, const bool general, __local uint* group_entry) {
     uint x = get_global_id(0), y = get_global_id(1);
+#ifdef STACK_SIZE
+    /* Before any work-item returns: tile_root may wait for the whole work-group. */
+    uint root = general ? 0u : tile_root(PRIMARY, group_entry);
+#endif
     if (x >= width || y < row0 || y >= row_end) return;
     float3 org = eye.xyz;
     float3 dir = general ? camera_ray(CAMERA, x, y, &org)
@@ -31,12 +64,10 @@ FORCE_INLINE void primary_pixel(PRIMARY_PARAMS, const bool general) {
     float t = INFINITY;
     uint best = MISS;
 #ifdef STACK_SIZE
-    if (entries != 0) {
-        uint root = entries[get_group_id(1) * get_num_groups(0) + get_group_id(0)];
-        if (root != MISS) best = trace_from(SCENE, root, org, dir, INFINITY, false, false, &t);
-    } else
+    if (root != MISS) best = trace_from(SCENE, root, org, dir, INFINITY, false, false, &t);
+#else
+    best = trace(SCENE, org, dir, INFINITY, false, false, &t);
 #endif
-        best = trace(SCENE, org, dir, INFINITY, false, false, &t);
     float3 n = (float3)(0.0f);
     if (best != MISS && shade != SHADE_DEPTH && colors != 0) {
         n = shading_normal(SURFACE, &tris[best], org, dir);
@@ -64,21 +95,23 @@ KERNEL void tile_entries(SCENE_PARAMS, CAMERA_BAND_PARAMS, uint tile_width, uint
     uint i = get_global_id(0);
     if (i >= tiles) return;
     uint x0 = (i % tiles_x) * tile_width, y0 = row0 + (i / tiles_x) * tile_height;
-    Frustum f = tile_frustum(eye, p0, du, dv, x0, y0, min(x0 + tile_width, width),
-                             min(y0 + tile_height, row_end));
-    entries[i] = entry_node(nodes, &f);
+    entries[i] = tile_entry(SCENE, CAMERA, width, row0, row_end, x0, y0, x0 + tile_width,
+                            y0 + tile_height);
 }
 #endif
 
 /* A perspective camera's primary rays, without barycentrics (barycentrics is not read);
- * with entries not null (a BVH program's), each work-group's from its tile's entry node. */
+ * in a BVH program each work-group's from its tile's entry node (tile_root). */
 #ifdef KERNEL_TRACE_PRIMARY
-KERNEL void trace_primary(PRIMARY_PARAMS) { primary_pixel(PRIMARY, false); }
+KERNEL void trace_primary(PRIMARY_PARAMS) {
+    __local uint group_entry;
+    primary_pixel(PRIMARY, false, &group_entry);
+}
 #endif
 
 /* Any camera's primary rays, with barycentrics where they are asked for. */
 #ifdef KERNEL_TRACE_PRIMARY_GENERAL
-KERNEL void trace_primary_general(PRIMARY_PARAMS) { primary_pixel(PRIMARY, true); }
+KERNEL void trace_primary_general(PRIMARY_PARAMS) { primary_pixel(PRIMARY, true, 0); }
 #endif
 
 /* Arbitrary rays: origin and t_max in rays[2i] (xyz, w), direction in rays[2i + 1]. With

@@ -574,22 +574,29 @@ fn entry_cases() -> Vec<Case> {
 
 /// A perspective camera's rays start from their tile's entry node: on every layout and
 /// device, `trace_primary`'s hits (from the entries) equal `trace_primary_general`'s
-/// (from the root) bit for bit, and the reference's, on every case.
+/// (from the root) bit for bit, and the reference's, on every case. Each device runs
+/// both ways of finding the entries: a pass before the rays, and each work-group finding
+/// its own (`GROUP_ENTRIES`, which GPUs take for some layouts), the latter on the cases
+/// made to catch a wrong entry.
 #[test]
 fn camera_rays_from_their_tiles_entry_nodes_find_the_hits_from_the_root() {
+    let pass = cases().into_iter().chain(entry_cases()).map(|c| (c, ""));
+    let group = entry_cases().into_iter().map(|c| (c, "-D GROUP_ENTRIES"));
+    let cases: Vec<_> = pass.chain(group).collect();
     on_every_device(|device| {
-        for c in cases().into_iter().chain(entry_cases()) {
-            let reference = reference(&c);
+        for (c, form) in &cases {
+            let reference = reference(c);
             assert!(coverage(&reference) > 0, "{}: sees nothing", c.name);
             for tracer in DeviceTracer::layouts() {
-                let mut cl = tracer.prepare(device, &c.mesh, &BuildOptions::default());
+                let options = BuildOptions::default();
+                let mut cl = tracer.prepare_built_with(device, &c.mesh, &options, form);
                 let shade = ShadeParams::new(Shade::Lambert, &c.camera, &c.mesh.bounds());
                 let pinhole = c.camera.pinhole();
                 let (w, h) = (c.camera.width, c.camera.height);
                 let entries = cl.render(&pinhole, w, h, &shade, false).unwrap().0;
                 let from_root = shade.with_barycentrics(true);
                 let root = cl.render(&pinhole, w, h, &from_root, false).unwrap().0;
-                let what = format!("{} on {}", tracer.name(), device.info.name);
+                let what = format!("{} {form} on {}", tracer.name(), device.info.name);
                 for (i, (a, b)) in entries.hits.iter().zip(&root.hits).enumerate() {
                     assert!(
                         a.prim == b.prim && a.t.to_bits() == b.t.to_bits(),
@@ -597,7 +604,7 @@ fn camera_rays_from_their_tiles_entry_nodes_find_the_hits_from_the_root() {
                         c.name
                     );
                 }
-                check(&c, &what, &reference, &root);
+                check(c, &what, &reference, &root);
             }
         }
     });

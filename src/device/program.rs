@@ -260,6 +260,22 @@ fn device_defines(kind: DeviceKind) -> Vec<String> {
     }
 }
 
+/// The define with which camera rays' work-groups find their tile's entry node themselves.
+const GROUP_ENTRIES: &str = "GROUP_ENTRIES";
+
+/// Whether camera rays in `layout` on a device of `kind` find their tile's entry node in
+/// their own work-group, its first work-item walking down while the others wait
+/// (`GROUP_ENTRIES`, cl/trace.cl), rather than from a `tile_entries` pass before them. Both
+/// give the same hits. On an H100 the work-groups' own walk made the binary layouts' camera
+/// rays faster than the pass (`bin64` 6-11%, `bin32` level to 10%), and the wide layouts',
+/// whose walks test four or eight boxes a node, level to 11% slower. On CPUs a
+/// work-group's work-items run one after another, so the walk delays each of its rays: up
+/// to 30% slower (docs/bench/2026-12-07-group-entries.md).
+fn groups_find_entries(kind: DeviceKind, layout: Layout) -> bool {
+    let binary = matches!(layout, Layout::Bin32 | Layout::Bin64);
+    kind == DeviceKind::Gpu && binary
+}
+
 /// Whether a program of `kernels` on a device of `kind` asks for correctly rounded division
 /// and square root, as the host computes them. Progressive samples are held to the host's
 /// within a tolerance, not to the bit (tests/secondary.rs, tests/surfaces.rs), and on GPUs
@@ -378,6 +394,7 @@ pub struct Program {
     layout: Option<Layout>,
     kernels: Kernels,
     features: SurfaceFeatures,
+    group_entries: bool,
     cache: Option<CacheUse>,
 }
 
@@ -395,6 +412,12 @@ impl Program {
     /// The kernels the program holds.
     pub fn kernels(&self) -> Kernels {
         self.kernels
+    }
+
+    /// Whether its camera rays' work-groups find their tile's entry node themselves
+    /// (`GROUP_ENTRIES`, cl/trace.cl), with no `tile_entries` pass before them.
+    pub(crate) fn group_entries(&self) -> bool {
+        self.group_entries
     }
 
     /// The OpenCL program.
@@ -436,6 +459,9 @@ impl ClDevice {
             Some((layout, stack_size)) => layout_defines(layout, stack_size),
             None => Vec::new(),
         };
+        if layout.is_some_and(|layout| groups_find_entries(self.info.kind, layout)) {
+            defines.push(GROUP_ENTRIES.into());
+        }
         defines.extend(surface_defines(features, self.info.kind));
         defines.extend(device_defines(self.info.kind));
         defines.extend(kernels.defines());
@@ -451,6 +477,9 @@ impl ClDevice {
             extra.push_str(&nv_options(kernels, bvh.is_none()));
         }
         extra.push_str(extra_options);
+        // Tests ask for the other devices' form through extra_options.
+        let group_entries =
+            defines.iter().any(|d| d == GROUP_ENTRIES) || extra_options.contains(GROUP_ENTRIES);
         let exact = rounds_exactly(kernels, self.info.kind);
         let options = self.build_options(&defines, extra.trim_end(), exact);
         let source = program_source(&program_files(layout, sampling));
@@ -461,6 +490,7 @@ impl ClDevice {
                 layout,
                 kernels,
                 features,
+                group_entries,
                 cache: None,
             });
         };
@@ -473,6 +503,7 @@ impl ClDevice {
                         layout,
                         kernels,
                         features,
+                        group_entries,
                         cache: Some(CacheUse::Hit(entry.path)),
                     });
                 }
@@ -493,6 +524,7 @@ impl ClDevice {
             layout,
             kernels,
             features,
+            group_entries,
             cache: Some(cache),
         })
     }
@@ -770,6 +802,20 @@ mod tests {
                 );
             }
             assert!(!has(one(true, true, false), "LOCKSTEP_SHADOW"));
+        }
+    }
+
+    /// GPUs' camera rays in the binary layouts find their tile entries in their
+    /// work-groups; every other device and layout in a pass of its own.
+    #[test]
+    fn only_gpus_binary_layouts_find_tile_entries_in_their_work_groups() {
+        for layout in Layout::ALL {
+            for kind in [DeviceKind::Cpu, DeviceKind::Accelerator, DeviceKind::Other] {
+                assert!(!groups_find_entries(kind, layout), "{kind:?} {layout:?}");
+            }
+            let gpu = groups_find_entries(DeviceKind::Gpu, layout);
+            let binary = layout == Layout::Bin32 || layout == Layout::Bin64;
+            assert_eq!(gpu, binary, "{layout:?}");
         }
     }
 

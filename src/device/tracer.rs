@@ -1279,8 +1279,10 @@ impl<'d> ClTracer<'d> {
         // The band (row0, row_end) changes from launch to launch.
         let mut band = BandParams::new(camera, width);
         let local = self.local;
-        // Perspective camera rays start from their tile's entry node (cl/trace.cl).
-        let entries = match self.primary[2].as_ref().filter(|_| !general) {
+        // Perspective camera rays start from their tile's entry node (cl/trace.cl), found by
+        // a pass of its own unless their work-groups find it themselves.
+        let pass = !general && !self.program.group_entries();
+        let entries = match self.primary[2].as_ref().filter(|_| pass) {
             Some(kernel) => {
                 let tiles = self.tiles(w, band_capacity).1;
                 Some((kernel, entries_buffer(device, tiles)?))
