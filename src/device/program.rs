@@ -267,7 +267,7 @@ const GROUP_ENTRIES: &str = "GROUP_ENTRIES";
 /// their own work-group, its first work-item walking down while the others wait
 /// (`GROUP_ENTRIES`, cl/trace.cl), rather than from a `tile_entries` pass before them. Both
 /// give the same hits. On an H100 the work-groups' own walk made the binary layouts' camera
-/// rays faster than the pass (`bin64` 6-11%, `bin32` level to 10%), and the wide layouts',
+/// rays faster than the pass (`bin64` 5-14%, `bin32` level to 10%), and the wide layouts',
 /// whose walks test four or eight boxes a node, level to 11% slower. On CPUs a
 /// work-group's work-items run one after another, so the walk delays each of its rays: up
 /// to 30% slower (docs/bench/2026-12-07-group-entries.md).
