@@ -4,12 +4,14 @@
 # a362c5b); G = this session's build with GROUP_ENTRIES on GPUs for every layout
 # (cltrace-gall.xz). Bench rounds alternated, tinybvh each round; then the renders of G
 # and head compared on every layout. Round 1 adds bin64's diffuse-16 rows and tinybvh's.
-# A shorter run: LAYOUTS=bin64,cwbvh D16=0 ROUNDS=3.
+# A shorter run: LAYOUTS=bin64,cwbvh D16=0 ROUNDS=3. GBIN=cltrace-head runs the head's build
+# (93d1383: GROUP_ENTRIES for bin32 and bin64 only) as G.
 set -u
 ROUNDS=${ROUNDS:-3}; LAYOUTS=${LAYOUTS:-bin32,bin64,wide4,wide8,cwbvh}; D16=${D16:-1}
 OUT=${OUT:-/tmp/out}; mkdir -p $OUT
 nvidia-smi --query-gpu=name,uuid,driver_version,clocks.max.sm --format=csv,noheader | tee $OUT/gpu.txt
-for v in main:cltrace new:cltrace-new gall:cltrace-gall; do xz -dc .gpu/${v#*:}.xz > /tmp/cltrace-${v%%:*}; done; chmod +x /tmp/cltrace-*
+GBIN=${GBIN:-cltrace-gall}
+for v in main:cltrace new:cltrace-new gall:$GBIN; do xz -dc .gpu/${v#*:}.xz > /tmp/cltrace-${v%%:*}; done; chmod +x /tmp/cltrace-*
 xz -dc .gpu/tinybvh/harness.xz > /tmp/harness; xz -dc .gpu/tinybvh/raydump.xz > /tmp/raydump; chmod +x /tmp/harness /tmp/raydump
 mkdir -p /tmp/data
 (/tmp/raydump .gpu/scenes/stanford_bunny.obj.gz /tmp/data/bunny && /tmp/raydump .gpu/scenes/stanford_dragon.obj.gz /tmp/data/dragon) > $OUT/raydump.txt 2>&1 &
