@@ -12,6 +12,7 @@ px = [(v[3 * i], v[3 * i + 1], v[3 * i + 2]) for i in range(w * h)]
 # PFM rows run bottom to top; the warp's first and second pixels are neighbours in a row.
 first = [p for i, p in enumerate(px) if (i % w) % 8 == 0]; second = [p for i, p in enumerate(px) if (i % w) % 8 == 1]
 third = [p for i, p in enumerate(px) if (i % w) % 8 == 2]
+fourth = [p for i, p in enumerate(px) if (i % w) % 8 == 3]
 s = lambda rows, k: sum(r[k] for r in rows) * scale
 ea, em, et = s(first, 0), s(first, 1), s(first, 2)
 sa, sm, idle = s(second, 0), s(second, 1), s(second, 2)
@@ -23,3 +24,7 @@ print('%s: extension turns %.3f, shadow turns %.3f, both %.3f (lane iterations /
          ea / (32 * et), sa / (32 * et), 100 * idle / (2 * 32 * et)))
 print('%s: warp iterations a sample (the traversal time a SIMD group spends, per pixel sample) %.2f; warp turns a sample %.3f'
       % (label, (em + sm) / 32 / (w * h * j['spp']) * 32, et * 2 / (w * h * j['spp']) * 32))
+pm = s(fourth, 0)
+if pm > 0:
+    print('%s: each shadow ray traced with the next extension ray in one turn: the group\'s iterations a sample %.2f (x%.3f)'
+          % (label, pm / (w * h * j['spp']), (em + sm) / pm))
