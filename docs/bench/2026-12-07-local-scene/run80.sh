@@ -8,19 +8,14 @@ REPO=$PWD; OUT=${OUT:-/tmp/out}; mkdir -p $OUT; ROUNDS=${ROUNDS:-3}; SIZE=${SIZE
 nvidia-smi 2>/dev/null --query-gpu=name,uuid,driver_version,clocks.max.sm --format=csv,noheader | tee -a $OUT/gpu.txt
 CL=${CL:-/tmp/cltrace}; [ $CL = /tmp/cltrace ] && { xz -dc .gpu/cltrace-head.xz > /tmp/cltrace; chmod +x /tmp/cltrace; }
 ${PY:-python3} scripts/mitsuba/compare.py scenes --out /tmp/sc --size $SIZE --spp 256 --scenes cornell,gold,glass > $OUT/scenes.txt 2>&1
-for s in cornell gold glass; do
-  $CL bvh /tmp/sc/$s/scene.toml > /tmp/bvh-$s.txt 2>&1
-  echo "$s $(awk '/^triangles/{print $2}' /tmp/bvh-$s.txt) $(awk '/^bin64/{print $2}' /tmp/bvh-$s.txt)" >> /tmp/sizes.txt
-done
-cat /tmp/sizes.txt | tee -a $OUT/path.txt
-# Runs cltrace with variant $2's kernels and options for scene $1, the rest of the line its arguments.
-with() { local s=$1 v=$2; shift 2; read -r _ T N < <(grep "^$s " /tmp/sizes.txt)
+# Runs cltrace with variant $1's kernels and options, the rest of the line its arguments.
+with() { local v=$1; shift
   case $v in
     head) "$@";;
     P) CLTRACE_KERNEL_DIR=$REPO/.gpu/k-P CLTRACE_BUILD_OPTIONS="-DPAIRED_SHADOW" "$@";;
   esac; }
 for r in $(seq $ROUNDS); do for v in $VARIANTS; do for s in cornell gold glass; do
-  with $s $v timeout 60 $CL render /tmp/sc/$s/scene.toml -q --device $DEV --layout bin64 --max-bounces 8 -o /tmp/x-$v-$s.pfm --json /tmp/j.json > /tmp/log-$v-$s.txt 2>&1 || tail -3 /tmp/log-$v-$s.txt | tee -a $OUT/path.txt
+  with $v timeout 60 $CL render /tmp/sc/$s/scene.toml -q --device $DEV --layout bin64 --max-bounces 8 -o /tmp/x-$v-$s.pfm --json /tmp/j.json > /tmp/log-$v-$s.txt 2>&1 || tail -3 /tmp/log-$v-$s.txt | tee -a $OUT/path.txt
   python3 -c "import json;j=json.load(open('/tmp/j.json'));print('[r$r $v $s] %.1f Msamples/s (sampling %.1f ms)'%($W*$H*256/j['sampling_ms']/1e3,j['sampling_ms']))" | tee -a $OUT/path.txt
   rm -f /tmp/j.json
 done; done; echo "round $r done at ${SECONDS}s" | tee -a $OUT/path.txt; done
