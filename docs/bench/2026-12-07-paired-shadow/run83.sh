@@ -3,7 +3,7 @@
 # dbf3acc: GPUs' bin64 path programs trace each shadow ray with the next ray in one
 # traversal) on compare.py's three scenes, 1920x1080, 256 spp, --max-bounces 8, bin64,
 # alternated rounds and PFM compares; then compare.py speed against Mitsuba 3 cuda_ad_rgb
-# with each binary; on an H200 item 4 (run74.sh).
+# with each binary; on an H200 item 4 (run74.sh: not reached this session).
 set -u
 REPO=$PWD; OUT=${OUT:-/tmp/out}; mkdir -p $OUT; ROUNDS=${ROUNDS:-3}
 nvidia-smi --query-gpu=name,uuid,driver_version,clocks.max.sm --format=csv,noheader | tee -a $OUT/gpu.txt
