@@ -928,93 +928,112 @@ impl<'d> ClTracer<'d> {
         self.scene.clear_status(device)?;
         let local = self.local;
         let mut times = DeviceTimes::default();
-        // Made on every core: one thread faulting in the pages of a 4K frame's 265 MB of sums
-        // takes tens of milliseconds.
-        let mut host = Vec::with_capacity(w * capacity);
-        {
-            use rayon::prelude::*;
-            host.par_extend(rayon::iter::repeat_n(Long4::zero(), w * capacity));
-        }
-        let mut counts = vec![0u32; pitch * capacity];
-        let mut group0 = 0usize;
-        'groups: while group0 < h {
-            let group_rows = capacity.min(h - group0);
-            clear_rows(device, &accum, &rays, 0..accum.height)?;
-            // The accumulation image's row 0 is the group's first row; bands run inside it.
-            band.row0 = (y0 + group0) as u32;
-            let mut stopped = false;
-            let mut rays_per_sample = None;
-            let mut done = 0;
-            'samples: while done < samples.len() as u32 {
-                // Where one sample of the group takes less than a launch's target, a launch
-                // takes several: fewer launches, and the kernel's work-items start their
-                // next path as soon as one ends. The first takes one, to count its rays.
-                let whole = self.sample_bands.next_rows(w, group_rows) == group_rows;
-                let take = match done > 0 && whole {
-                    true => self
-                        .sample_bands
-                        .next_samples(w * group_rows, samples.len() as u32 - done),
-                    false => 1,
-                };
-                let first = samples.start + done;
-                params.sample = first;
-                params.sample_count = take;
-                let mut row = group0;
-                while row < group0 + group_rows {
-                    let rows = self.sample_bands.next_rows(w, group0 + group_rows - row);
-                    band.row_end = (y0 + row + rows) as u32;
-                    set(&band, &params)?;
-                    let ms = launch_rect(device, &kernel, local, [x0, y0 + row], [w, rows])?;
-                    times.kernel_ms += ms;
-                    times.launches += 1;
-                    self.sample_bands.learn(rows * w * take as usize, ms);
-                    row += rows;
-                    if stop.load(Ordering::Relaxed) {
-                        stopped = true;
-                        break 'samples;
-                    }
-                }
-                if group_rows == h {
-                    let per_sample = match rays_per_sample {
-                        Some(n) => n,
-                        None => {
-                            rays.read(&mut counts[..pitch * group_rows])
-                                .enq()
-                                .map_err(|e| device.error("reading the ray counts back", e))?;
-                            let n = counts.iter().map(|&c| c as u64).sum::<u64>();
-                            *rays_per_sample.insert(n)
-                        }
+        // Faulted in on every core: the device waits while the first sample's counts are read
+        // into it, which into fresh pages took an H100's host 8 ms at 1080p.
+        let mut counts = filled(0u32, pitch * capacity);
+        // The host's side of the read-back, made ready on other cores while the launches
+        // after the first sample wait on the device (ReadBack).
+        let background = device.info.kind != DeviceKind::Cpu;
+        let mut read_back: Option<ReadBack> = None;
+        let outcome = (|| {
+            let mut group0 = 0usize;
+            'groups: while group0 < h {
+                let group_rows = capacity.min(h - group0);
+                clear_rows(device, &accum, &rays, 0..accum.height)?;
+                // The accumulation image's row 0 is the group's first row; bands run inside it.
+                band.row0 = (y0 + group0) as u32;
+                let mut stopped = false;
+                let mut rays_per_sample = None;
+                let mut done = 0;
+                'samples: while done < samples.len() as u32 {
+                    // Where one sample of the group takes less than a launch's target, a launch
+                    // takes several: fewer launches, and the kernel's work-items start their
+                    // next path as soon as one ends. The first takes one, to count its rays.
+                    let whole = self.sample_bands.next_rows(w, group_rows) == group_rows;
+                    let take = match done > 0 && whole {
+                        true => self
+                            .sample_bands
+                            .next_samples(w * group_rows, samples.len() as u32 - done),
+                        false => 1,
                     };
-                    on_sample(done + take, per_sample * (done + take) as u64);
-                }
-                done += take;
-            }
-            let start = Instant::now();
-            accum.read_rows(device, group_rows, &mut host)?;
-            rays.read(&mut counts[..pitch * group_rows])
-                .enq()
-                .map_err(|e| device.error("reading the ray counts back", e))?;
-            times.read_back_ms += start.elapsed().as_secs_f64() * 1e3;
-            // On every core: a 4K frame's sums are 265 MB.
-            use rayon::prelude::*;
-            accumulation.pixels[group0 * w..(group0 + group_rows) * w]
-                .par_chunks_mut(w)
-                .zip(host.par_chunks(w))
-                .for_each(|(out, sums)| {
-                    for (o, v) in out.iter_mut().zip(sums) {
-                        for c in 0..4 {
-                            o[c] += v[c];
+                    let first = samples.start + done;
+                    params.sample = first;
+                    params.sample_count = take;
+                    let mut row = group0;
+                    while row < group0 + group_rows {
+                        let rows = self.sample_bands.next_rows(w, group0 + group_rows - row);
+                        band.row_end = (y0 + row + rows) as u32;
+                        set(&band, &params)?;
+                        let ms = launch_rect(device, &kernel, local, [x0, y0 + row], [w, rows])?;
+                        times.kernel_ms += ms;
+                        times.launches += 1;
+                        self.sample_bands.learn(rows * w * take as usize, ms);
+                        row += rows;
+                        if stop.load(Ordering::Relaxed) {
+                            stopped = true;
+                            break 'samples;
                         }
                     }
-                });
-            accumulation.rays += row_sums(&counts, pitch, w, 0..group_rows);
-            self.scene.check_status(device)?;
-            group0 += group_rows;
-            if stopped {
-                break 'groups;
+                    if group_rows == h {
+                        let per_sample = match rays_per_sample {
+                            Some(n) => n,
+                            None => {
+                                rays.read(&mut counts[..pitch * group_rows])
+                                    .enq()
+                                    .map_err(|e| device.error("reading the ray counts back", e))?;
+                                use rayon::prelude::*;
+                                let n = counts.par_iter().map(|&c| c as u64).sum::<u64>();
+                                *rays_per_sample.insert(n)
+                            }
+                        };
+                        on_sample(done + take, per_sample * (done + take) as u64);
+                    }
+                    if read_back.is_none() {
+                        read_back = Some(ReadBack::prepare(
+                            &mut accumulation.pixels,
+                            w * capacity,
+                            background,
+                        ));
+                    }
+                    done += take;
+                }
+                let start = Instant::now();
+                let host = read_back
+                    .get_or_insert_with(|| {
+                        ReadBack::prepare(&mut accumulation.pixels, w * capacity, false)
+                    })
+                    .ready(&mut accumulation.pixels);
+                accum.read_rows(device, group_rows, host)?;
+                rays.read(&mut counts[..pitch * group_rows])
+                    .enq()
+                    .map_err(|e| device.error("reading the ray counts back", e))?;
+                times.read_back_ms += start.elapsed().as_secs_f64() * 1e3;
+                // On every core: a 4K frame's sums are 265 MB.
+                use rayon::prelude::*;
+                accumulation.pixels[group0 * w..(group0 + group_rows) * w]
+                    .par_chunks_mut(w)
+                    .zip(host.par_chunks(w))
+                    .for_each(|(out, sums)| {
+                        for (o, v) in out.iter_mut().zip(sums) {
+                            for c in 0..4 {
+                                o[c] += v[c];
+                            }
+                        }
+                    });
+                accumulation.rays += row_sums(&counts, pitch, w, 0..group_rows);
+                self.scene.check_status(device)?;
+                group0 += group_rows;
+                if stopped {
+                    break 'groups;
+                }
             }
+            Ok(times)
+        })();
+        // An error before the first read-back leaves the accumulation its sums.
+        if let Some(read_back) = read_back.as_mut() {
+            read_back.ready(&mut accumulation.pixels);
         }
-        Ok(times)
+        outcome
     }
 
     /// The sample kernel of `settings`' mode, created with its arguments bound, and an
@@ -1651,13 +1670,80 @@ fn entries_buffer(device: &ClDevice, tiles: usize) -> Result<ocl::Buffer<u32>> {
 
 /// The rays counted in `rows` of a pitched image of counts `width` wide.
 fn row_sums(counts: &[u32], pitch: usize, width: usize, rows: std::ops::Range<usize>) -> u64 {
-    rows.map(|y| {
-        counts[y * pitch..y * pitch + width]
-            .iter()
-            .map(|&c| c as u64)
-            .sum::<u64>()
-    })
-    .sum()
+    use rayon::prelude::*;
+    rows.into_par_iter()
+        .map(|y| {
+            counts[y * pitch..y * pitch + width]
+                .iter()
+                .map(|&c| c as u64)
+                .sum::<u64>()
+        })
+        .sum()
+}
+
+/// What the host needs to take a frame's sums back: a zeroed buffer to read them into, and
+/// the pages of the accumulation they are added to, faulted in. A GPU's host makes them
+/// ready on its cores while the device samples; made before the launches instead, they
+/// left an H100 idle for milliseconds at 1080p (66 MB of sums), and made during the first
+/// sample they slowed its ray-count read (docs/bench/2026-12-07-host-sums.md). A CPU
+/// device's cores are the host's, busy with the launches: there the buffer is made at
+/// once, as are small ones.
+struct ReadBack {
+    /// The thread making the buffer and the pages ready, with the accumulation's pixels.
+    preparing: Option<std::thread::JoinHandle<Prepared>>,
+    host: Vec<Long4>,
+}
+
+/// The accumulation's pixels, and the buffer to read sums into.
+type Prepared = (Vec<[i64; 4]>, Vec<Long4>);
+
+impl ReadBack {
+    /// Starts making ready a buffer of `len` sums and, in the background, the
+    /// accumulation's `pixels`, which [`ReadBack::ready`] gives back.
+    fn prepare(pixels: &mut Vec<[i64; 4]>, len: usize, background: bool) -> ReadBack {
+        // Below this many sums a thread costs more than it saves.
+        if !background || len < 1 << 16 {
+            return ReadBack {
+                preparing: None,
+                host: filled(Long4::zero(), len),
+            };
+        }
+        let mut pixels = std::mem::take(pixels);
+        let preparing = std::thread::spawn(move || {
+            use rayon::prelude::*;
+            // One write a page (4 KiB: 128 pixels) faults it in; the values stay.
+            pixels
+                .par_chunks_mut(128)
+                .for_each(|page| page[0] = std::hint::black_box(page[0]));
+            (pixels, filled(Long4::zero(), len))
+        });
+        ReadBack {
+            preparing: Some(preparing),
+            host: Vec::new(),
+        }
+    }
+
+    /// The buffer to read into, once ready; the accumulation's pixels back in `pixels`.
+    fn ready(&mut self, pixels: &mut Vec<[i64; 4]>) -> &mut [Long4] {
+        if let Some(thread) = self.preparing.take() {
+            let (made, host) = thread
+                .join()
+                .expect("the read-back's preparation does not panic");
+            *pixels = made;
+            self.host = host;
+        }
+        &mut self.host
+    }
+}
+
+/// `len` copies of `value`, written on every core: one thread faulting in the pages of a 4K
+/// frame's 265 MB of sums takes tens of milliseconds, and on the GPU machines' virtual
+/// hosts one faulting in a 1080p frame's 8 MB of ray counts took 8 ms.
+fn filled<T: ocl::OclPrm + Send + Sync>(value: T, len: usize) -> Vec<T> {
+    use rayon::prelude::*;
+    let mut v = Vec::with_capacity(len);
+    v.par_extend(rayon::iter::repeat_n(value, len));
+    v
 }
 
 /// Sums as the host keeps them, as the device's `long4`s, to read into.
@@ -1897,6 +1983,22 @@ mod tests {
         assert_eq!(default_shape(DeviceKind::Cpu, 4096), [8, 8]);
         assert_eq!(default_shape(DeviceKind::Accelerator, 256), [8, 8]);
         assert_eq!(default_shape(DeviceKind::Cpu, 32), [1, 1]);
+    }
+
+    #[test]
+    fn a_read_back_made_in_the_background_gives_the_sums_back_unchanged() {
+        for (len, background) in [(1 << 17, true), (1 << 17, false), (10, true)] {
+            let sums: Vec<[i64; 4]> = (0..len as i64).map(|i| [i, -i, 2 * i, 1]).collect();
+            let mut pixels = sums.clone();
+            let mut read_back = ReadBack::prepare(&mut pixels, len + 3, background);
+            let host = read_back.ready(&mut pixels);
+            assert_eq!(host.len(), len + 3);
+            assert!(host.iter().all(|v| *v == Long4::zero()));
+            assert!(pixels == sums, "{len} sums, background {background}");
+            // Ready again: the same buffer, the pixels left alone.
+            assert_eq!(read_back.ready(&mut pixels).len(), len + 3);
+            assert!(pixels == sums);
+        }
     }
 
     #[test]
