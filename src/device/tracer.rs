@@ -1020,7 +1020,10 @@ impl<'d> ClTracer<'d> {
                             }
                         }
                     });
-                accumulation.rays += row_sums(&counts, pitch, w, 0..group_rows);
+                accumulation.rays += (0..group_rows)
+                    .into_par_iter()
+                    .map(|y| row_sums(&counts, pitch, w, y..y + 1))
+                    .sum::<u64>();
                 self.scene.check_status(device)?;
                 group0 += group_rows;
                 if stopped {
@@ -1670,15 +1673,13 @@ fn entries_buffer(device: &ClDevice, tiles: usize) -> Result<ocl::Buffer<u32>> {
 
 /// The rays counted in `rows` of a pitched image of counts `width` wide.
 fn row_sums(counts: &[u32], pitch: usize, width: usize, rows: std::ops::Range<usize>) -> u64 {
-    use rayon::prelude::*;
-    rows.into_par_iter()
-        .map(|y| {
-            counts[y * pitch..y * pitch + width]
-                .iter()
-                .map(|&c| c as u64)
-                .sum::<u64>()
-        })
-        .sum()
+    rows.map(|y| {
+        counts[y * pitch..y * pitch + width]
+            .iter()
+            .map(|&c| c as u64)
+            .sum::<u64>()
+    })
+    .sum()
 }
 
 /// What the host needs to take a frame's sums back: a zeroed buffer to read them into, and
