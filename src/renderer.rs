@@ -379,7 +379,9 @@ impl<'d> Renderer<'d> {
                     accumulation,
                     stop,
                     &mut |done, rays| {
-                        bar.set_message(mrays(start, rays));
+                        if let Some(rays) = rays {
+                            bar.set_message(mrays(start, rays));
+                        }
                         bar.set_position(done as u64);
                     },
                 )?;

@@ -66,6 +66,55 @@ fn images_larger_than_one_allocation_are_rendered_in_bands() {
     assert_eq!(whole.hits, banded.hits);
     assert_eq!(whole.colors, banded.colors);
     assert_eq!(whole_acc.pixels, banded_acc.pixels);
+    // Counted in line band by band, and for the whole image with the first sample's counts
+    // read on another queue into the buffer the last read-back reuses.
+    assert_eq!(whole_acc.rays, banded_acc.rays);
+}
+
+/// The rays a render reports while it samples: the first sample's count times the samples
+/// done, once a thread has read that count back, and at the end every ray counted.
+#[test]
+fn progress_reports_the_first_sample_s_rays_then_all_of_them() {
+    let mesh = generate(Generator::Sphere { subdivisions: 3 });
+    let bvh = Bin32Bvh::new(Bvh::build(&mesh, &BuildOptions::default()), &mesh);
+    let camera = Camera::bench(&mesh.bounds(), 160, 120).unwrap();
+    let settings = SampleSettings {
+        lighting: Lighting::Path { max_bounces: 3 },
+        offset: 1e-4,
+        seed: 5,
+    };
+    let device = device();
+    let program = ClTracer::compile(
+        &device,
+        Some((cltrace::bvh::Layout::Bin32, bvh.depth)),
+        cltrace::device::Kernels::ALL,
+    )
+    .unwrap();
+    let mut tracer = ClTracer::bvh(&device, &program, &bvh).unwrap();
+    let mut render = |samples: std::ops::Range<u32>| {
+        let mut acc = Accumulation::new(160, 120);
+        let mut reports = Vec::new();
+        tracer
+            .render_samples(
+                &camera.pinhole(),
+                &settings,
+                samples,
+                &mut acc,
+                &AtomicBool::new(false),
+                &mut |done, rays| reports.push((done, rays)),
+            )
+            .unwrap();
+        (acc.rays, reports)
+    };
+    let (first, _) = render(0..1);
+    let (all, reports) = render(0..24);
+    assert!(all > 24 * 160 * 120, "{all} rays for paths of one to four");
+    assert_eq!(reports.last(), Some(&(24, Some(all))));
+    for &(done, rays) in &reports[..reports.len() - 1] {
+        if let Some(rays) = rays {
+            assert_eq!(rays, first * done as u64, "after {done} samples");
+        }
+    }
 }
 
 /// Buffers larger than the staging buffer (64 MB) go to the device in pinned chunks: a

@@ -891,7 +891,8 @@ impl<'d> ClTracer<'d> {
     /// the next one where the accumulation image fits on the device, so that stopping early
     /// (`stop` set, checked between launches) leaves every pixel with nearly the same number
     /// of samples. `on_sample` is called after each finished sample with the number of
-    /// samples done and the rays traced so far (counted after the first, estimated after).
+    /// samples done and the rays traced so far, once the first sample's are counted
+    /// (estimated from them until the last sample's read-back counts them all).
     #[allow(clippy::too_many_arguments)]
     pub fn render_samples(
         &mut self,
@@ -900,7 +901,7 @@ impl<'d> ClTracer<'d> {
         samples: std::ops::Range<u32>,
         accumulation: &mut Accumulation,
         stop: &std::sync::atomic::AtomicBool,
-        on_sample: &mut dyn FnMut(u32, u64),
+        on_sample: &mut dyn FnMut(u32, Option<u64>),
     ) -> Result<DeviceTimes> {
         use std::sync::atomic::Ordering;
         let device = self.device;
@@ -928,9 +929,11 @@ impl<'d> ClTracer<'d> {
         self.scene.clear_status(device)?;
         let local = self.local;
         let mut times = DeviceTimes::default();
-        // Faulted in on every core: the device waits while the first sample's counts are read
-        // into it, which into fresh pages took an H100's host 8 ms at 1080p.
-        let mut counts = filled(0u32, pitch * capacity);
+        // The host's copy of the ray counts: the first sample's (FirstCounts), then each
+        // group's, read back with its sums.
+        let mut counts: Vec<u32> = Vec::new();
+        let mut first_counts: Option<FirstCounts> = None;
+        let counts_error = |e| device.error("reading the ray counts back", e);
         // The host's side of the read-back, made ready on other cores while the launches
         // after the first sample wait on the device (ReadBack).
         let background = device.info.kind != DeviceKind::Cpu;
@@ -975,18 +978,25 @@ impl<'d> ClTracer<'d> {
                         }
                     }
                     if group_rows == h {
-                        let per_sample = match rays_per_sample {
-                            Some(n) => n,
-                            None => {
-                                rays.read(&mut counts[..pitch * group_rows])
-                                    .enq()
-                                    .map_err(|e| device.error("reading the ray counts back", e))?;
-                                use rayon::prelude::*;
-                                let n = counts.par_iter().map(|&c| c as u64).sum::<u64>();
-                                *rays_per_sample.insert(n)
-                            }
-                        };
-                        on_sample(done + take, per_sample * (done + take) as u64);
+                        if rays_per_sample.is_none() {
+                            first_counts = match first_counts.take() {
+                                None if done == 0 => Some(
+                                    FirstCounts::start(device, &rays, pitch * group_rows)
+                                        .map_err(counts_error)?,
+                                ),
+                                Some(first) if first.is_finished() => {
+                                    let (read, n) = first.finish().map_err(counts_error)?;
+                                    counts = read;
+                                    rays_per_sample = Some(n);
+                                    None
+                                }
+                                pending => pending,
+                            };
+                        }
+                        on_sample(
+                            done + take,
+                            rays_per_sample.map(|n| n * (done + take) as u64),
+                        );
                     }
                     if read_back.is_none() {
                         read_back = Some(ReadBack::prepare(
@@ -1004,9 +1014,16 @@ impl<'d> ClTracer<'d> {
                     })
                     .ready(&mut accumulation.pixels);
                 accum.read_rows(device, group_rows, host)?;
+                if let Some(first) = first_counts.take() {
+                    // Its buffer is the one to read into.
+                    counts = first.finish().map_err(counts_error)?.0;
+                }
+                if counts.len() < pitch * group_rows {
+                    counts = filled(0u32, pitch * capacity);
+                }
                 rays.read(&mut counts[..pitch * group_rows])
                     .enq()
-                    .map_err(|e| device.error("reading the ray counts back", e))?;
+                    .map_err(counts_error)?;
                 times.read_back_ms += start.elapsed().as_secs_f64() * 1e3;
                 // On every core: a 4K frame's sums are 265 MB.
                 use rayon::prelude::*;
@@ -1020,10 +1037,14 @@ impl<'d> ClTracer<'d> {
                             }
                         }
                     });
-                accumulation.rays += (0..group_rows)
+                let group_rays = (0..group_rows)
                     .into_par_iter()
                     .map(|y| row_sums(&counts, pitch, w, y..y + 1))
                     .sum::<u64>();
+                accumulation.rays += group_rays;
+                if group_rows == h {
+                    on_sample(done, Some(group_rays));
+                }
                 self.scene.check_status(device)?;
                 group0 += group_rows;
                 if stopped {
@@ -1680,6 +1701,50 @@ fn row_sums(counts: &[u32], pitch: usize, width: usize, rows: std::ops::Range<us
             .sum::<u64>()
     })
     .sum()
+}
+
+/// The first sample's ray counts, read while the launches with the rest of the samples run:
+/// copied on the device after the first sample, then read on a queue of their own by a
+/// thread, into a buffer it makes. They give the progress bar its rate. Read in line, they
+/// left the device idle while they crossed and the host made their buffer: reading them so
+/// made an H200's 1080p path renders 1.00-1.02x as fast (docs/bench/2026-12-07-tile-order.md).
+struct FirstCounts(std::thread::JoinHandle<std::result::Result<(Vec<u32>, u64), ocl::Error>>);
+
+impl FirstCounts {
+    /// Starts reading the first `len` counts of `rays` as the commands queued so far leave
+    /// them.
+    fn start(
+        device: &ClDevice,
+        rays: &ocl::Buffer<u32>,
+        len: usize,
+    ) -> std::result::Result<FirstCounts, ocl::Error> {
+        let copy = ocl::Buffer::<u32>::builder()
+            .queue(device.queue.clone())
+            .len(len)
+            .build()?;
+        let mut copied = ocl::Event::empty();
+        rays.copy(&copy, Some(0), Some(len))
+            .enew(&mut copied)
+            .enq()?;
+        let (context, id) = (device.context.clone(), device.info.device);
+        Ok(FirstCounts(std::thread::spawn(move || {
+            use rayon::prelude::*;
+            let queue = ocl::Queue::new(&context, id, None)?;
+            let mut counts = filled(0u32, len);
+            copy.read(&mut counts).queue(&queue).ewait(&copied).enq()?;
+            let n = counts.par_iter().map(|&c| c as u64).sum();
+            Ok((counts, n))
+        })))
+    }
+
+    fn is_finished(&self) -> bool {
+        self.0.is_finished()
+    }
+
+    /// The counts and their sum.
+    fn finish(self) -> std::result::Result<(Vec<u32>, u64), ocl::Error> {
+        self.0.join().expect("reading the counts does not panic")
+    }
 }
 
 /// What the host needs to take a frame's sums back: a zeroed buffer to read them into, and
