@@ -30,12 +30,7 @@ fn images_larger_than_one_allocation_are_rendered_in_bands() {
     };
     let device = device();
     let render = |budget: Option<u64>| {
-        let program = ClTracer::compile(
-            &device,
-            Some((cltrace::bvh::Layout::Bin32, bvh.depth)),
-            cltrace::device::Kernels::ALL,
-        )
-        .unwrap();
+        let program = every_kernel(&device, &bvh);
         let mut tracer = ClTracer::bvh(&device, &program, &bvh).unwrap();
         if let Some(bytes) = budget {
             tracer.limit_image_bytes(bytes);
@@ -71,6 +66,16 @@ fn images_larger_than_one_allocation_are_rendered_in_bands() {
     assert_eq!(whole_acc.rays, banded_acc.rays);
 }
 
+/// A program of every kernel for `bvh`'s scene.
+fn every_kernel(device: &cltrace::device::ClDevice, bvh: &Bin32Bvh) -> cltrace::device::Program {
+    ClTracer::compile(
+        device,
+        Some((cltrace::bvh::Layout::Bin32, bvh.depth)),
+        cltrace::device::Kernels::ALL,
+    )
+    .unwrap()
+}
+
 /// The rays a render reports while it samples: the first sample's count times the samples
 /// done, once a thread has read that count back, and at the end every ray counted.
 #[test]
@@ -84,12 +89,7 @@ fn progress_reports_the_first_sample_s_rays_then_all_of_them() {
         seed: 5,
     };
     let device = device();
-    let program = ClTracer::compile(
-        &device,
-        Some((cltrace::bvh::Layout::Bin32, bvh.depth)),
-        cltrace::device::Kernels::ALL,
-    )
-    .unwrap();
+    let program = every_kernel(&device, &bvh);
     let mut tracer = ClTracer::bvh(&device, &program, &bvh).unwrap();
     let mut render = |samples: std::ops::Range<u32>| {
         let mut acc = Accumulation::new(160, 120);
