@@ -1726,6 +1726,9 @@ impl FirstCounts {
         rays.copy(&copy, Some(0), Some(len))
             .enew(&mut copied)
             .enq()?;
+        // The other queue's read waits on the copy: it must reach the device even if no
+        // command after it does (an error ending the render).
+        device.queue.flush()?;
         let (context, id) = (device.context.clone(), device.info.device);
         Ok(FirstCounts(std::thread::spawn(move || {
             use rayon::prelude::*;
