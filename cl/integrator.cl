@@ -50,7 +50,18 @@ FORCE_INLINE float3 sky(float3 d) {
  * to_fixed in src/render/integrator.rs. */
 FORCE_INLINE long to_fixed(float v) {
     v = v >= 0.0f ? fmin(v, MAX_SAMPLE_RADIANCE) : 0.0f;
+#ifdef POCL_DEVICE_ADDRESS_BITS
+    /* PoCL (whose compiler alone defines that) builds convert_long_rte, and rint, from
+     * about 27 instructions with branches: 3-4% of a sample's instructions, 1-2% of its
+     * time on 2 cores (docs/bench/2026-12-08-cpu-rounding.md). So there the sum is
+     * rounded to the nearest integer, ties to even, by adding and taking away 2^23, which
+     * does it to a float below 2^23 in the default rounding mode; larger ones are
+     * integers already. Other compilers round in an instruction or two. */
+    float s = v * RADIANCE_SCALE;
+    return convert_long(s < 8388608.0f ? (s + 8388608.0f) - 8388608.0f : s);
+#else
     return convert_long_rte(v * RADIANCE_SCALE);
+#endif
 }
 
 FORCE_INLINE long3 fixed3(float3 radiance) {

@@ -472,6 +472,45 @@ fn launches_of_many_samples_sum_as_launches_of_one() {
     });
 }
 
+/// A sample's radiance goes into the sums rounded to the nearest unit, ties to even, on
+/// every device as on the host (`to_fixed`), at ties and where a float stops having a
+/// fraction (2^23 units): PoCL rounds by an addition, other compilers by the built-in
+/// (cl/integrator.cl). An emitter fills the view, so that every sample is its emission
+/// alone: light samples from it lie in its plane and bounces leave it for nothing.
+#[test]
+fn the_sums_round_ties_to_even_on_every_device() {
+    use cltrace::render::integrator::{RADIANCE_SCALE, to_fixed};
+    let units = [2.5f32, 3.5, 8_388_607.5];
+    let emission = units.map(|u| u / RADIANCE_SCALE);
+    let expected = [2, 4, 8_388_608];
+    assert_eq!(emission.map(to_fixed), expected, "the host's rounding");
+    on_every_device(|device| {
+        let panel = quad_mesh([
+            [-50.0, -50.0, 0.0],
+            [50.0, -50.0, 0.0],
+            [50.0, 50.0, 0.0],
+            [-50.0, 50.0, 0.0],
+        ]);
+        let materials = Materials::uniform(Material::emitting([0.5; 3], emission));
+        let cam = camera(&panel, [0.0, 0.0, 1.0], [0.0, 0.0, 0.0], 60.0, (8, 6));
+        let spp = 3;
+        let acc = accumulate_with(
+            Method::ClBvh,
+            prepare(Layout::default(), true),
+            Some(device),
+            (&panel, &materials),
+            &cam,
+            Lighting::Path { max_bounces: 4 },
+            spp,
+            5,
+        );
+        for p in &acc.pixels {
+            let want = expected.map(|e| e * spp as i64);
+            assert_eq!([p[0], p[1], p[2]], want, "a pixel's sums");
+        }
+    });
+}
+
 /// Brute force and every layout's traversal give the same samples to the bit. Regression
 /// (issue 19): on an H100 this test never ended, as the brute-force path program built by
 /// NVIDIA's optimizing compiler never did; NVIDIA now builds it unoptimized (`nv_options`
