@@ -52,7 +52,7 @@ FORCE_INLINE long to_fixed(float v) {
     v = v >= 0.0f ? fmin(v, MAX_SAMPLE_RADIANCE) : 0.0f;
 #ifdef POCL_DEVICE_ADDRESS_BITS
     /* PoCL (whose compiler alone defines that) builds convert_long_rte, and rint, from
-     * about 27 instructions with branches: 3-4% of a sample's instructions, 1-2% of its
+     * about 27 instructions with branches: 3-4% of a sample's instructions, 2-4% of its
      * time on 2 cores (docs/bench/2026-12-08-cpu-rounding.md). So there the sum is
      * rounded to the nearest integer, ties to even, by adding and taking away 2^23, which
      * does it to a float below 2^23 in the default rounding mode; larger ones are
