@@ -11,6 +11,10 @@
 # widest vectors) and with line tables (-g); the second counts the kernel alone.
 # CLTRACE_KERNEL_DIR and CLTRACE_BUILD_OPTIONS pass on (-g is added).
 set -eu
+if [ $# -lt 4 ] || [ "$3" != "--" ]; then
+    echo "usage: $0 KERNEL SAMPLES -- CLTRACE_RENDER_ARGS..." >&2
+    exit 2
+fi
 kernel=$1 samples=$2
 shift 3
 root=$(cd "$(dirname "$0")/../.." && pwd)
